@@ -1,0 +1,1 @@
+"""Gateway: exposes the simulated house as real devices over Modbus TCP/RTU and CANopen."""

@@ -1,0 +1,1 @@
+"""Simulated CoSES house: components, houses, profiles binding, signal catalogue."""
