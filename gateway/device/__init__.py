@@ -1,0 +1,1 @@
+"""Device runtime: a map plus live state and logic, shared by every transport."""

@@ -1,0 +1,1 @@
+"""Device maps: the DeviceMap/Point model, the codec, lint and register-table export."""

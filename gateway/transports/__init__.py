@@ -1,0 +1,1 @@
+"""Transports: one module per protocol, turning frames into Device calls."""

@@ -1,0 +1,521 @@
+"""The one canopen adapter: a DeviceMap as a CiA 301 object dictionary and EDS, and Devices as nodes.
+
+`build_object_dictionary(dmap)` generates 0x1000/0x1001/0x1003/0x1008-0x100A/0x1014/0x1017/0x1018/
+0x1200, four RPDOs and four TPDOs (0x1400/0x1600/0x1800/0x1A00) with the pre-defined connection set,
+and the map's points in the manufacturer area (their `co_index`/`co_sub`, device-interfaces §2.7).
+`export_eds` writes it with canopen's exporter.
+
+`CanopenTransport(devices, bus)` serves each Device as a node on one bus. canopen 2.4's LocalNode
+does only the SDO protocol and NMT parsing, so this module adds what a real node does (stack notes):
+NMT states enforced (PDOs only in OPERATIONAL, no SDO in STOPPED, boot-up after reset), heartbeat
+from 0x1017, TPDOs on their event timer or every n-th SYNC, RPDOs applied through the Device (its
+validation and watchdog), the RPDO deadline (event timer, EMCY 0x8250), PDO remapping by SDO, SDO
+aborts from the Refusal table, and CAN faults: error frames, error-passive and bus-off (silent
+until "recover"), each reported through `on_event(dict)`.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+import time
+import zlib
+from collections.abc import Callable, Iterable
+
+import can
+import canopen
+from canopen.nmt import NmtBase
+from canopen.objectdictionary import ODArray, ODRecord, ODVariable, ObjectDictionary, datatypes as dt
+from canopen.sdo import SdoAbortedError
+
+from gateway.maps import codec
+from gateway.maps.model import DeviceMap, Point
+from gateway.transports.can_bus import FAULT_KINDS, error_message, fault_kind, open_bus, parse_bus_spec
+from plant.errors import TransportError
+
+log = logging.getLogger(__name__)
+CO_TYPE = {"bool": dt.BOOLEAN, "uint16": dt.UNSIGNED16, "int16": dt.INTEGER16, "bits16": dt.UNSIGNED16,
+           "uint32": dt.UNSIGNED32, "int32": dt.INTEGER32, "float32": dt.REAL32, "string": dt.VISIBLE_STRING}
+ACCESS = {"R": "ro", "RW": "rw", "W": "wo"}
+N_PDO, DEFAULT_TPDO_EVENT_MS = 4, 1000
+PRE_OPERATIONAL, OPERATIONAL, STOPPED = 127, 5, 4
+PDO_INVALID = 1 << 31
+EMCY_PASSIVE, EMCY_BUS_OFF_RECOVERED, EMCY_PDO_LENGTH, EMCY_RPDO_TIMEOUT = 0x8120, 0x8140, 0x8210, 0x8250
+
+
+# ---------------------------------------------------------------------------- object dictionary
+def _var(od_parent, name: str, index: int, sub: int, dtype: int, access: str, default=None,
+         mappable: bool = False, description: str = "") -> ODVariable:
+    var = ODVariable(name, index, sub)
+    var.data_type, var.access_type, var.default = dtype, access, default
+    var.pdo_mappable, var.description = mappable, description
+    od_parent.add_member(var) if isinstance(od_parent, (ODRecord, ODArray)) else od_parent.add_object(var)
+    return var
+
+
+def _record(od: ObjectDictionary, name: str, index: int, subs: list[tuple], array: bool = False):
+    """A RECORD/ARRAY whose sub 0 holds the highest sub-index; subs = (sub, name, type, access, default)."""
+    rec = (ODArray if array else ODRecord)(name, index)
+    _var(rec, "Highest sub-index supported", index, 0, dt.UNSIGNED8,
+         "rw" if index in range(0x1600, 0x1800) or index in range(0x1A00, 0x1C00) else "const",
+         max(s[0] for s in subs))
+    for sub, sub_name, dtype, access, default in subs:
+        _var(rec, sub_name, index, sub, dtype, access, default)
+    od.add_object(rec)
+    return rec
+
+
+def _point_var(parent, p: Point, index: int, sub: int) -> None:
+    notes = [p.desc.replace(";", ",").replace("\n", " "), f"unit {p.unit or '1'}", f"scale {p.scale:g}"]
+    if p.offset:
+        notes.append(f"offset {p.offset:g}")
+    notes.append(f"ref {p.ref.replace(';', ',')}")
+    mappable = p.type != "string" and (p.pdo is not None or p.table == "input" or p.command is not None)
+    var = _var(parent, p.name, index, sub, CO_TYPE[p.type], ACCESS[p.access],
+               mappable=mappable, description="; ".join(n for n in notes if n).replace(";", ","))
+    var.unit, var.factor = p.unit, p.scale
+    if p.type in ("uint16", "int16", "uint32", "int32", "bits16") and p.range is not None:
+        var.min, var.max = (int(codec.to_raw(p, v)) for v in p.range)
+    if isinstance(p.default, (int, float)) and p.type != "string":
+        var.default = codec.to_raw(p, float(p.default))
+
+
+def point_objects(dmap: DeviceMap) -> dict[tuple[int, int], Point]:
+    """(index, sub-index) of every point that has a CANopen object."""
+    return {(p.co_index, p.co_sub or 0): p for p in dmap.points if p.co_index is not None}
+
+
+def build_object_dictionary(dmap: DeviceMap) -> ObjectDictionary:
+    """The CiA 301 object dictionary of one device, generated from its map."""
+    co, ident, node_id = dmap.canopen, dmap.identity, dmap.canopen.node_id
+    od = ObjectDictionary()
+    od.node_id = node_id
+    od.comments = (f"Generated from devices/{dmap.id}.toml (map {dmap.map_version}) by the CoSES twin\n"
+                   f"Style: {dmap.style}".replace(";", ","))
+    info = od.device_information
+    info.vendor_name, info.product_name = ident.vendor, ident.product
+    info.product_number, info.revision_number = ident.product_code, ident.revision
+    info.nr_of_RXPDO = info.nr_of_TXPDO = N_PDO
+    info.allowed_baudrates = {125_000, 250_000, 500_000}
+    _var(od, "Device type", 0x1000, 0, dt.UNSIGNED32, "ro", co.device_type)
+    _var(od, "Error register", 0x1001, 0, dt.UNSIGNED8, "ro", 0)
+    history = [(i, f"Standard error field {i}", dt.UNSIGNED32, "ro", 0) for i in range(1, 9)]
+    _record(od, "Pre-defined error field", 0x1003, history, array=True)["Highest sub-index supported"].access_type = "rw"
+    _var(od, "Manufacturer device name", 0x1008, 0, dt.VISIBLE_STRING, "const", ident.product or dmap.model)
+    _var(od, "Manufacturer hardware version", 0x1009, 0, dt.VISIBLE_STRING, "const", dmap.map_version)
+    _var(od, "Manufacturer software version", 0x100A, 0, dt.VISIBLE_STRING, "const", ident.firmware or "0")
+    _var(od, "COB-ID EMCY", 0x1014, 0, dt.UNSIGNED32, "ro", 0x80 + node_id)
+    _var(od, "Producer heartbeat time", 0x1017, 0, dt.UNSIGNED16, "rw", co.heartbeat_ms)
+    serial = int(ident.serial) if ident.serial.isdigit() and int(ident.serial) < 2**32 \
+        else zlib.crc32(ident.serial.encode())
+    _record(od, "Identity object", 0x1018, [
+        (1, "Vendor-ID", dt.UNSIGNED32, "ro", 0), (2, "Product code", dt.UNSIGNED32, "ro", ident.product_code),
+        (3, "Revision number", dt.UNSIGNED32, "ro", ident.revision), (4, "Serial number", dt.UNSIGNED32, "ro", serial)])
+    _record(od, "SDO server parameter", 0x1200, [
+        (1, "COB-ID client to server", dt.UNSIGNED32, "ro", 0x600 + node_id),
+        (2, "COB-ID server to client", dt.UNSIGNED32, "ro", 0x580 + node_id)])
+    deadline_ms = int(dmap.watchdog.timeout_s * 1000) if dmap.watchdog else 0
+    for n in range(N_PDO):
+        for kind, comm, mapping, base in (("R", 0x1400, 0x1600, 0x200), ("T", 0x1800, 0x1A00, 0x180)):
+            mapped = [p for p in dmap.points if p.pdo == f"{kind}{n + 1}" and p.co_index is not None]
+            entries = [(p.co_index << 16) | ((p.co_sub or 0) << 8) | _bits(p) for p in mapped]
+            cob_id = base + 0x100 * n + node_id | (0 if entries else PDO_INVALID)
+            # The RPDO event timer is the deadline monitor; UNSIGNED16 ms cannot hold a longer watchdog.
+            event = DEFAULT_TPDO_EVENT_MS if kind == "T" else (deadline_ms if deadline_ms <= 0xFFFF else 0)
+            _record(od, f"{kind}PDO{n + 1} communication parameter", comm + n, [
+                (1, "COB-ID", dt.UNSIGNED32, "rw", cob_id), (2, "Transmission type", dt.UNSIGNED8, "rw", 0xFE),
+                (3, "Inhibit time", dt.UNSIGNED16, "rw", 0), (5, "Event timer", dt.UNSIGNED16, "rw", event)])
+            rec = _record(od, f"{kind}PDO{n + 1} mapping parameter", mapping + n, [
+                (i, f"Mapped object {i}", dt.UNSIGNED32, "rw", entries[i - 1] if i <= len(entries) else 0)
+                for i in range(1, 9)])
+            rec[0].default = len(entries)
+    groups: dict[int, list[tuple[int, Point]]] = {}
+    for (index, sub), p in point_objects(dmap).items():
+        groups.setdefault(index, []).append((sub, p))
+    for index, members in sorted(groups.items()):
+        if len(members) == 1 and members[0][0] == 0:
+            _point_var(od, members[0][1], index, 0)
+            continue
+        rec = ODRecord(f"{dmap.id} 0x{index:04X}", index)
+        _var(rec, "Highest sub-index supported", index, 0, dt.UNSIGNED8, "const", max(s for s, _ in members))
+        for sub, p in sorted(members, key=lambda m: m[0]):
+            _point_var(rec, p, index, sub)
+        od.add_object(rec)
+    return od
+
+
+def _bits(p: Point) -> int:
+    return 8 if p.type == "bool" else 32 if p.type in ("uint32", "int32", "float32") else 16
+
+
+def export_eds(dmap: DeviceMap, dest) -> None:
+    """Write the device's EDS (CiA 306) to a path or text stream."""
+    canopen.objectdictionary.export_od(build_object_dictionary(dmap), dest, "eds")
+
+
+# ---------------------------------------------------------------------------------- one node
+class _Pdo:
+    """One PDO's configuration as read from 0x14xx-0x1Bxx, plus its run-time timers."""
+
+    def __init__(self, node: DeviceNode, comm: int, mapping: int) -> None:
+        cob = node.stored(comm, 1)
+        self.cob_id, self.enabled = cob & 0x7FF, not cob & PDO_INVALID
+        self.trans_type, self.event_s = node.stored(comm, 2), node.stored(comm, 5) / 1000.0
+        self.entries = []
+        for i in range(1, node.stored(mapping, 0) + 1):
+            value = node.stored(mapping, i)
+            if value >> 16:
+                self.entries.append((value >> 16, (value >> 8) & 0xFF, value & 0xFF))
+        self.size = sum(bits for _, _, bits in self.entries) // 8
+        self.due = 0.0            # next event-timer transmission (TPDO)
+        self.last_rx = None       # last reception (RPDO deadline)
+        self.syncs = 0
+
+
+class DeviceNode(canopen.LocalNode):
+    """A Device served as a CANopen node: live SDO values, NMT, heartbeat, PDOs, bus faults."""
+
+    def __init__(self, device, transport: CanopenTransport) -> None:
+        super().__init__(device.map.canopen.node_id, build_object_dictionary(device.map))
+        self.device, self.transport = device, transport
+        self.points = point_objects(device.map)
+        self.lock = threading.RLock()
+        self._write_callbacks.clear()   # NmtSlave would run its own heartbeat task; we produce it
+        self.bus_off = self.error_passive = False
+        self.history: list[int] = []
+        self.tpdos: list[_Pdo] = []
+        self.rpdos: dict[int, _Pdo] = {}
+        self.hb_due = 0.0
+
+    # canopen's LocalNode subscribes the SDO server and NMT slave directly; route them through us
+    # so STOPPED and bus-off can silence the node.
+    def associate_network(self, network: canopen.Network) -> None:
+        self.network = network
+        self.sdo.network = self.nmt.network = self.emcy.network = self      # sends go via send_message
+        network.subscribe(self.sdo.rx_cobid, self._on_sdo)
+        network.subscribe(0, self._on_nmt)
+        network.subscribe(0x80, self._on_sync)
+
+    def remove_network(self) -> None:
+        for cob, fn in ((self.sdo.rx_cobid, self._on_sdo), (0, self._on_nmt), (0x80, self._on_sync),
+                        *((p.cob_id, self._on_rpdo) for p in self.rpdos.values())):
+            self.network.unsubscribe(cob, fn)
+
+    def send_message(self, can_id: int, data: bytes, remote: bool = False) -> None:
+        if self.bus_off or self.device.link.mode in ("silent", "drop", "bad_crc"):
+            return
+        self.network.send_message(can_id, data, remote)
+
+    @property
+    def state(self) -> int:
+        return self.nmt._state  # canopen keeps the NMT state code only in this attribute
+
+    # -------------------------------------------------------------------- SDO object access
+    def stored(self, index: int, sub: int):
+        obj = self._find_object(index, sub)
+        return obj.decode_raw(super().get_data(index, sub))
+
+    def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:
+        obj = self._find_object(index, subindex)
+        if check_readable and not obj.readable:
+            raise SdoAbortedError(0x06010001)
+        point = self.points.get((index, subindex))
+        if point is not None:
+            raw = self.device.read_point(point.name)
+            if not isinstance(raw, (int, float, str, bool)):
+                raise SdoAbortedError(raw.sdo_abort)
+            return obj.encode_raw(raw) or b"\0"   # an empty string would abort "no data"
+        if index == 0x1001:
+            return bytes([self.error_register])
+        if index == 0x1003:
+            return obj.encode_raw(len(self.history) if subindex == 0 else
+                                  (self.history[subindex - 1] if subindex <= len(self.history) else 0))
+        return super().get_data(index, subindex, check_readable)
+
+    def set_data(self, index: int, subindex: int, data: bytes, check_writable: bool = False) -> None:
+        obj = self._find_object(index, subindex)
+        if check_writable and not obj.writable:
+            raise SdoAbortedError(0x06010002)
+        if obj.fixed_size and len(data) * 8 != len(obj):
+            raise SdoAbortedError(0x06070010)
+        value = obj.decode_raw(bytes(data))
+        point = self.points.get((index, subindex))
+        if point is not None:
+            self.write_point(point, value, "sdo")
+            return
+        if index == 0x1003:
+            if value != 0:
+                raise SdoAbortedError(0x06090030)   # only 0 (clear the history) may be written
+            self.history.clear()
+            return
+        if index in range(0x1600, 0x1604) or index in range(0x1A00, 0x1A04):
+            self._check_mapping(index, subindex, value)
+        super().set_data(index, subindex, data)
+        if 0x1400 <= index < 0x1C00:
+            self.load_pdos()    # canopen does not re-read a remapped PDO itself
+        self.transport.wake()
+
+    def write_point(self, point: Point, raw, via: str) -> None:
+        refusal = self.device.write_point(point.name, raw, client=f"canopen-{via}",
+                                          transport="canopen")
+        if refusal is not None:
+            raise SdoAbortedError(refusal.sdo_abort)
+
+    def _check_mapping(self, index: int, subindex: int, value: int) -> None:
+        receive = index < 0x1800
+        if subindex == 0:
+            entries = [self.stored(index, i) for i in range(1, min(value, 8) + 1)]
+            if value > 8 or sum(e & 0xFF for e in entries) > 64:
+                raise SdoAbortedError(0x06040042)   # mapped objects exceed the PDO length
+            return
+        target, sub, bits = value >> 16, (value >> 8) & 0xFF, value & 0xFF
+        if target == 0:
+            return
+        obj = self._find_object(target, sub)
+        if not obj.pdo_mappable or bits != len(obj) or (obj.writable if receive else obj.readable) is False:
+            raise SdoAbortedError(0x06040041)       # object cannot be mapped to the PDO
+
+    def load_pdos(self) -> None:
+        with self.lock:
+            for pdo in self.rpdos.values():
+                self.network.unsubscribe(pdo.cob_id, self._on_rpdo)
+            self.tpdos = [_Pdo(self, 0x1800 + n, 0x1A00 + n) for n in range(N_PDO)]
+            rpdos = [_Pdo(self, 0x1400 + n, 0x1600 + n) for n in range(N_PDO)]
+            self.rpdos = {p.cob_id: p for p in rpdos if p.enabled and p.entries}
+            for cob_id in self.rpdos:
+                self.network.subscribe(cob_id, self._on_rpdo)
+
+    # ---------------------------------------------------------------- bus callbacks
+    def _on_sdo(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if self.bus_off or self.state == STOPPED or self.device.link.mode != "none" and \
+                self.device.link.mode != "late":
+            return
+        if self.device.link.mode == "late":
+            time.sleep(min(self.device.link.delay_s, 1.0))   # holds the bus thread, like a slow node
+        with self.lock:
+            self.sdo.on_request(can_id, data, timestamp)
+
+    def _on_nmt(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if self.bus_off or len(data) < 2 or data[1] not in (0, self.id):
+            return
+        with self.lock:
+            old = self.state
+            NmtBase.on_command(self.nmt, can_id, data, timestamp)
+            if self.state == 0:
+                self.boot(reset_application=data[0] == 0x81)
+            elif self.state != old:
+                self._entered(old)
+
+    def boot(self, reset_application: bool = False) -> None:
+        """Power-on or NMT reset: defaults back, boot-up message, PRE-OPERATIONAL."""
+        with self.lock:
+            for index in list(self.data_store):
+                if reset_application or index < 0x2000:
+                    del self.data_store[index]
+            self.load_pdos()
+            old, self.nmt._state = self.state, 0
+            self.send_message(0x700 + self.id, b"\x00")
+            self.nmt._state = PRE_OPERATIONAL
+            self.hb_due = 0.0
+            self._entered(old)
+
+    def _entered(self, old: int) -> None:
+        for pdo in self.tpdos:
+            pdo.due, pdo.syncs = 0.0, 0
+        for pdo in self.rpdos.values():
+            pdo.last_rx = None
+        self.transport.report(self, "nmt", state=self.nmt.state, previous=old)
+        self.transport.wake()
+
+    def _on_sync(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if self.bus_off or self.state != OPERATIONAL:
+            return
+        with self.lock:
+            for pdo in self.tpdos:
+                if pdo.enabled and 1 <= pdo.trans_type <= 240:
+                    pdo.syncs += 1
+                    if pdo.syncs >= pdo.trans_type:
+                        pdo.syncs = 0
+                        self._transmit(pdo)
+
+    def _on_rpdo(self, can_id: int, data: bytes, timestamp: float) -> None:
+        if self.bus_off or self.state != OPERATIONAL:
+            return      # PDOs are not processed outside OPERATIONAL (CiA 301)
+        with self.lock:
+            pdo = self.rpdos.get(can_id)
+            if pdo is None:
+                return
+            if len(data) < pdo.size:
+                self.emergency(EMCY_PDO_LENGTH)
+                return
+            pdo.last_rx, offset = self.transport.now(), 0
+            for index, sub, bits in pdo.entries:
+                chunk, offset = bytes(data[offset:offset + bits // 8]), offset + bits // 8
+                point = self.points.get((index, sub))
+                if point is None:
+                    continue
+                try:
+                    self.write_point(point, self._find_object(index, sub).decode_raw(chunk), "rpdo")
+                except SdoAbortedError as exc:   # already recorded as a refused write by the Device
+                    log.debug("RPDO 0x%X %s refused: 0x%08X", can_id, point.name, exc.code)
+
+    # ----------------------------------------------------------------- periodic work
+    def tick(self, t: float) -> float:
+        """Heartbeat, TPDO event timers, RPDO deadlines; returns the time of the next due work."""
+        with self.lock:
+            next_due = t + 0.05
+            hb_ms = self.stored(0x1017, 0)
+            if hb_ms:
+                if t >= self.hb_due:
+                    self.send_message(0x700 + self.id, bytes([self.state]))
+                    self.hb_due = max(self.hb_due + hb_ms / 1000.0, t)
+                next_due = min(next_due, self.hb_due)
+            if self.state != OPERATIONAL:
+                return next_due
+            for pdo in self.tpdos:
+                if pdo.enabled and pdo.entries and pdo.trans_type >= 0xFE and pdo.event_s > 0:
+                    if t >= pdo.due:
+                        self._transmit(pdo)
+                        pdo.due = max(pdo.due + pdo.event_s, t) if pdo.due else t + pdo.event_s
+                    next_due = min(next_due, pdo.due)
+            for pdo in self.rpdos.values():
+                if pdo.event_s and pdo.last_rx is not None and t - pdo.last_rx > pdo.event_s:
+                    pdo.last_rx = None      # report once per silence
+                    self.emergency(EMCY_RPDO_TIMEOUT)
+                    self.transport.report(self, "rpdo_timeout", cob_id=pdo.cob_id)
+            return next_due
+
+    def _transmit(self, pdo: _Pdo) -> None:
+        payload = b"".join(self.get_data(i, s)[:bits // 8] for i, s, bits in pdo.entries)
+        self.send_message(pdo.cob_id, payload)
+
+    # ----------------------------------------------------------------------- faults
+    @property
+    def error_register(self) -> int:
+        fault = 1 if self.device.fault_code() else 0          # bit 0 generic error
+        comm = 0x10 if self.bus_off or self.error_passive else 0   # bit 4 communication
+        return fault | comm
+
+    def emergency(self, code: int) -> None:
+        self.history = ([code] + self.history)[:8]
+        if self.state != STOPPED:
+            self.emcy.send(code, self.error_register)
+        self.transport.report(self, "emcy", code=code)
+
+    def fault(self, kind: str) -> None:
+        with self.lock:
+            if kind == "error_passive":
+                self.error_passive = True
+                self.emergency(EMCY_PASSIVE)
+            elif kind == "bus_off":
+                self.bus_off = True
+            elif kind == "recover":
+                was_off, self.bus_off, self.error_passive = self.bus_off, False, False
+                if was_off:
+                    self.emergency(EMCY_BUS_OFF_RECOVERED)
+            self.transport.report(self, kind)
+
+
+# ------------------------------------------------------------------------------- transport
+class _FaultListener(can.Listener):
+    """Error frames arrive here; canopen's own listener drops them."""
+
+    def __init__(self, transport: CanopenTransport) -> None:
+        self.transport = transport
+
+    def on_message_received(self, msg: can.Message) -> None:
+        kind = fault_kind(msg)
+        if kind == "error_frame":
+            self.transport.report(None, "error_frame", origin="bus")
+        elif kind is not None:       # the bus (e.g. the hub) says our controller changed state
+            for node in self.transport.nodes.values():
+                node.fault(kind)
+
+
+class CanopenTransport:
+    """Serves Devices as CANopen nodes on one bus spec ("virtual:house1", "socketcand:...")."""
+
+    name = "canopen"
+
+    def __init__(self, devices: Iterable, bus: str = "virtual:house1", *,
+                 on_event: Callable[[dict], None] | None = None,
+                 now: Callable[[], float] = time.monotonic) -> None:
+        self.spec = parse_bus_spec(bus)
+        self.on_event, self.now = on_event, now
+        self.devices = list(devices)
+        ids = [d.map.canopen.node_id for d in self.devices]
+        if len(set(ids)) != len(ids):
+            raise TransportError(f"canopen on {self.spec}: node ids {ids} repeat; give each map's "
+                                 "[canopen] node_id a unique value 1…127")
+        self.network: canopen.Network | None = None
+        self.nodes: dict[int, DeviceNode] = {}
+        self._wake, self._stop = threading.Event(), threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def start(self) -> None:
+        """Open the bus, boot every node (boot-up message, PRE-OPERATIONAL) and start timers."""
+        network = canopen.Network(open_bus(self.spec))
+        network.NOTIFIER_CYCLE = 0.1     # bounds how long stop() waits for the bus thread
+        network.listeners.append(_FaultListener(self))
+        network.connect()
+        self.network = network
+        for device in self.devices:
+            node = DeviceNode(device, self)
+            network.add_node(node)
+            self.nodes[node.id] = node
+            node.boot()
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f"canopen-{self.spec}", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(2.0)
+            self._thread = None
+        if self.network is not None:
+            self.network.disconnect()
+            self.network = None
+        self.nodes.clear()
+
+    def wake(self) -> None:
+        self._wake.set()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            t = self.now()
+            due = t + 0.05
+            for node in list(self.nodes.values()):
+                try:
+                    due = min(due, node.tick(t))
+                except Exception:   # server-loop boundary: log, continue serving
+                    log.exception("canopen node 0x%X tick failed", node.id)
+            self._wake.wait(max(0.0, due - self.now()))
+            self._wake.clear()
+
+    def inject(self, kind: str, node_id: int | None = None) -> None:
+        """CAN fault: "error_frame" on the bus, or a node's controller "error_passive"/"bus_off"/"recover"."""
+        if kind not in FAULT_KINDS:
+            raise TransportError(f"canopen inject {kind!r}: unknown fault; use one of {', '.join(FAULT_KINDS)}")
+        if node_id is not None and node_id not in self.nodes:
+            raise TransportError(f"canopen inject {kind}: no node 0x{node_id:X}; serving "
+                                 f"{', '.join(f'0x{n:X}' for n in self.nodes) or 'none'}")
+        if kind == "error_frame":
+            # python-can's socketcand client cannot send error frames; there it is a local event only.
+            if self.network is not None and self.spec.interface == "virtual":
+                self.network.bus.send(error_message(kind))
+            self.report(self.nodes.get(node_id), "error_frame", origin="inject")
+            return
+        for node in ([self.nodes[node_id]] if node_id is not None else list(self.nodes.values())):
+            node.fault(kind)
+
+    def report(self, node: DeviceNode | None, kind: str, **detail) -> None:
+        event = {"source": "canopen", "kind": kind, "bus": str(self.spec),
+                 "node": node.id if node else None, "device": node.device.id if node else None, **detail}
+        if node is not None:
+            node.device.report({**event, "kind": f"canopen_{kind}"})
+        if self.on_event is not None:
+            try:
+                self.on_event(event)
+            except Exception:
+                log.exception("canopen on_event hook failed")

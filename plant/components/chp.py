@@ -1,0 +1,250 @@
+"""Micro-CHP RMB neoTower 2 (CoSES house 1): measured start-up, warm-up, steady state and cool-down with a water content.
+
+Physics in words
+----------------
+The machine follows the CoSES ProHMo digital twin (upstream ``NeoTower2.mo``): in steady state
+electric power and electric efficiency are linear in the modulation m (0.55…1, rate-limited at
+±0.025 1/s), the total efficiency comes from a measured table over return temperature and
+modulation, fuel = P_el/η_el and heat = fuel·(η_tot − η_el).  A start follows the measured start-up
+table (825 s after ≥ t_amb downtime, "cold"; 200 s otherwise, "warm"); during start-up and warm-up a
+downtime-dependent heat deficit P_heatup·H(τ), H = max(0, f0 − τ/t_steady), f0 = min(1, D/t_amb), is
+withheld (1.2 MJ·f0² in total).  A stop follows the measured cool-down (pump run-on) table.  Above
+T_ret_max the machine behaves as switched off.
+
+Differences to the original (documented choices)
+------------------------------------------------
+* Water content.  The original imposes T_sup = 80 °C and back-calculates the flow (no inertia).
+  Here the unit has a lumped water content V_water (state T_w, outlet temperature = T_w) heated by
+  P_heat and flushed by the flow through the unit, m_flow = max(own pump flow, m_ext).  The balance
+  C·dT_w/dt = P_heat + m_flow·CP·(T_in − T_w), C = CP·RHO·V_water, is integrated EXACTLY over the
+  step for the (constant) heat and flow of the step (exponential solution), so it is stable for any
+  dt and any external flow; the returned T_out is the step-mean outlet temperature, so that
+  P_heat·dt = m_flow·CP·(T_out − T_in)·dt + C·ΔT_w holds to rounding.  (For a·dt < 1e-8,
+  a = m·CP/C, the explicit Euler form with T_out = T_w at the step start is used — identical to first
+  order.)  This deviates from the plain explicit scheme with T_out = T_w,old of the brief only in
+  that it stays exact and stable when m·CP·dt > C (e.g. 60 s steps with a strong external flow).
+* Internal pump.  Instead of the back-calculated flow: feed-forward m = P_heat/(CP·(T_set − T_in))
+  plus a proportional correction C·(T_w − T_set)/(CP·(T_set − T_in)·τ_c), τ_c = max(tau_pump, 3·dt),
+  clamped to [0, m_pump_max].  It holds T_w at T_sup_set in steady state; an external flow larger
+  than the pump's lowers the outlet temperature (the "suction" effect the original cannot show).
+* Start-up.  P_el (col 2), fuel (col 5) and the heat formula (col 4, minus the warm-up deficit) are
+  those of the table.  The measured supply temperature (col 6) reads ≈22 °C while no water flows
+  (stagnant pipe) and 63 °C when the pump starts, so the engine warms its coolant beforehand.  This
+  coolant warming is modelled as extra heat into the water content, P_pre, taken from the fuel that
+  the table shows as not delivered (P_pre ≤ P_fuel − max(P_el, 0) − P_tab, so fuel − el − heat ≥ 0
+  always): before the first tabulated heat the content is warmed linearly towards the first
+  measured flowing supply temperature (cold start) or T_sup_set (warm start), afterwards towards
+  col 6.  The pump runs only while the tabulated heat is > 0: feed-forward on col 6 with only the
+  flow-reducing side of the correction (a content warmer than the briefly falling table value is
+  not flushed out).  With a small V_water (≤ 2 l) the outlet reproduces the rising part of col 6;
+  with the default 12 l the fuel surplus (≈6 kW) can warm the content by only ≈0.12 K/s, so the
+  outlet lags the measured 57 → 80 °C rise of 743–825 s (≈68 °C at 825 s, 80 °C at ≈970 s; the
+  measured rise implies an effective hot volume of ≈2–3 l).
+* Cool-down.  Own pump flow = col 3 · (pump flow just before the stop); the residual engine heat
+  into the water is own_flow·CP·max(0, col 2 − T_in) (the original's delivered heat), which keeps
+  the outlet at the tabulated temperature; P_el = col 4.  A cool-down happens only after a real
+  start (not at simulation start).
+* First start.  The original initialises the stop instant to the simulation start, so the first
+  start is warm.  Here the downtime before the first start is t − t0 + initial_downtime (default
+  36000 s), so the first start is cold unless the parameter is reduced.
+* The 0.1 s start delay of the original is dropped; the rate limiter is a plain slew limit.
+
+Parameters: see ``Params`` (units SI, temperatures in °C).
+Data source: upstream repository DZinsmeister/CoSES_thermal_ProHMo,
+``HeatGenerator/LaboratoryModels/Data/NeoTower2/`` (neoTower2_Efficiency/StartUp/CoolDown.txt),
+copied to ``plant/data/chp_neotower2/`` (see NOTICE there).
+Assumptions: one water node; no heat loss of the idle unit to the room; gas on LHV basis.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from math import exp, expm1
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+from ..tables import interp1, interp2, read_tables
+from ..water import CP, RHO
+
+DATA = Path(__file__).resolve().parent.parent / "data" / "chp_neotower2"
+
+
+@dataclass(frozen=True)
+class Params:
+    P_el_max: float = param(1900.0, "W", "electric power at 100 % modulation", 100.0, 100e3)
+    m_min: float = param(0.55, "1", "minimum modulation (electric-power based)", 0.0, 1.0)
+    eta_el_max: float = param(0.24, "1", "electric efficiency at 100 % modulation", 0.01, 0.6)
+    eta_el_min: float = param(0.18, "1", "electric efficiency at minimum modulation", 0.01, 0.6)
+    eta_tot_max: float = param(0.90, "1", "total-efficiency scaling (table normalised by 0.90)", 0.1, 1.2)
+    P_heatup: float = param(1000.0, "W", "heat withheld for warm-up after a long stop", 0.0, 100e3)
+    t_start_cold: float = param(825.0, "s", "start-up length after downtime >= t_amb", 1.0, 3600.0)
+    t_start_warm: float = param(200.0, "s", "start-up length after a shorter downtime", 1.0, 3600.0)
+    t_steady: float = param(2400.0, "s", "time after start at which the warm-up deficit has vanished", 1.0, 86400.0)
+    t_amb: float = param(36000.0, "s", "downtime after which the machine is fully cold", 1.0, 1e6)
+    t_stop: float = param(84.0, "s", "length of the tabulated cool-down", 0.0, 600.0)
+    T_sup_set: float = param(80.0, "degC", "supply temperature held by the internal pump", 30.0, 95.0)
+    T_ret_max: float = param(75.0, "degC", "return temperature above which the unit behaves as off", 20.0, 95.0)
+    T_ret_min: float = param(20.0, "degC", "lower clamp of the efficiency-table lookup", 0.0, 60.0)
+    P_idle: float = param(35.0, "W", "stand-by electric consumption", 0.0, 1000.0)
+    slew: float = param(0.025, "1/s", "rate limit of the effective modulation", 1e-4, 10.0)
+    V_water: float = param(0.012, "m3", "water content of the unit (thermal inertia)", 1e-5, 1.0)
+    m_pump_max: float = param(0.25, "kg/s", "maximum flow of the internal pump", 1e-3, 5.0)
+    tau_pump: float = param(5.0, "s", "time constant of the pump's temperature correction (>= 3 dt used)", 0.1, 600.0)
+    initial_downtime: float = param(36000.0, "s", "downtime assumed before the simulation start", 0.0, 1e7)
+    T_w0: float = param(20.0, "degC", "initial water-content temperature", 0.0, 100.0)
+
+
+# indices into the packed parameter vector (field order; checked by a test against index_of)
+P_EL_MAX, M_MIN, ETA_EL_MAX, ETA_EL_MIN, ETA_TOT_MAX, P_HEATUP, T_START_COLD, T_START_WARM = range(8)
+T_STEADY, T_AMB, T_STOP, T_SUP_SET, T_RET_MAX, T_RET_MIN, P_IDLE, SLEW = range(8, 16)
+V_WATER, M_PUMP_MAX, TAU_PUMP, INITIAL_DOWNTIME, T_W0 = range(16, 21)
+
+STATES = ("y", "T_w", "t_on", "t_off", "running", "m_last", "m_stop", "f0", "t_start",
+          "starts", "run_seconds", "E_fuel", "E_el", "E_heat")
+X_Y, X_TW, X_TON, X_TOFF, X_RUN, X_MLAST, X_MSTOP, X_F0, X_TSTART = range(9)
+X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT = range(9, 14)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    x = np.zeros(len(STATES), dtype=np.float64)
+    x[X_TW] = params.T_w0
+    x[X_TOFF] = -params.initial_downtime
+    return x
+
+
+@functools.cache
+def tables() -> tuple[np.ndarray, ...]:
+    """(tab_eff, tab_start, tab_cool): Efficiency(11,3), StartUp(39,6), CoolDown(15,5)."""
+    eff = read_tables(DATA / "neoTower2_Efficiency.txt")["Efficiency"]
+    start = read_tables(DATA / "neoTower2_StartUp.txt")["StartUp"]
+    cool = read_tables(DATA / "neoTower2_CoolDown.txt")["CoolDown"]
+    return eff, start, cool
+
+
+@njit(cache=True, inline="always")
+def _water(Tw, P, m, T_in, C, dt):
+    """Exact step of C dT/dt = P + m CP (T_in - T) for constant P, m: returns (dT_w, T_out mean)."""
+    a_dt = m * CP * dt / C
+    if a_dt < 1e-8:
+        return dt * (P + m * CP * (T_in - Tw)) / C, Tw
+    g = -expm1(-a_dt) / a_dt
+    dT = g * dt * (P + m * CP * (T_in - Tw)) / C
+    T_out = T_in + g * (Tw - T_in) + (1.0 - g) * P / (m * CP)
+    return dT, T_out
+
+
+@njit(cache=True)
+def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
+    """Advance the CHP by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
+    C = CP * RHO * p[V_WATER]
+    Tw = x[X_TW]
+    on_eff = on > 0.5 and T_in < p[T_RET_MAX]
+    # switching
+    if on_eff and x[X_RUN] < 0.5:
+        D = t - x[X_TOFF]
+        x[X_TON] = t
+        x[X_RUN] = 1.0
+        x[X_F0] = min(1.0, D / p[T_AMB])
+        x[X_TSTART] = p[T_START_COLD] if D >= p[T_AMB] else p[T_START_WARM]
+        x[X_STARTS] += 1.0
+    elif (not on_eff) and x[X_RUN] > 0.5:
+        x[X_RUN] = 0.0
+        x[X_TOFF] = t
+        x[X_MSTOP] = x[X_MLAST]
+    m_pump = 0.0
+    P_el = 0.0
+    P_fuel = 0.0
+    P_heat = 0.0
+    mode = 0.0
+    if x[X_RUN] > 0.5:
+        tau = t - x[X_TON]
+        t_start = x[X_TSTART]
+        target_y = 1.0 if tau < t_start else min(1.0, max(0.0, y_set))
+        dy = target_y - x[X_Y]
+        lim = p[SLEW] * dt
+        x[X_Y] += min(lim, max(-lim, dy))
+        m = min(1.0, max(p[M_MIN], x[X_Y]))
+        H = max(0.0, x[X_F0] - tau / p[T_STEADY])
+        Tk = max(T_in, p[T_RET_MIN]) + 273.15
+        eta_tot = interp2(Tk, m, tab_eff) * p[ETA_TOT_MAX] / 0.90
+        P_fuel_nom = p[P_EL_MAX] / p[ETA_EL_MAX]
+        if tau < t_start:
+            mode = 1.0
+            ts = tab_start[:, 0]
+            P_el = interp1(tau, ts, tab_start[:, 1]) * p[P_EL_MAX]
+            P_fuel = interp1(tau, ts, tab_start[:, 4]) * P_fuel_nom
+            f_q = interp1(tau, ts, tab_start[:, 3])
+            P_tab = max(0.0, f_q * P_fuel_nom * (eta_tot - p[ETA_EL_MAX]) - p[P_HEATUP] * H)
+            surplus = max(0.0, P_fuel - max(P_el, 0.0) - P_tab)
+            # first tabulated heat: last zero row of col 4 before the first positive one
+            n = tab_start.shape[0]
+            i0 = n - 1
+            for i in range(n - 1):
+                if tab_start[i + 1, 3] > 0.0:
+                    i0 = i
+                    break
+            tau0 = tab_start[i0, 0]
+            tau_pos = tab_start[min(i0 + 1, n - 1), 0]
+            T_first = tab_start[min(i0 + 1, n - 1), 5]
+            if t_start <= tau0:
+                tau0 = t_start
+                T_first = p[T_SUP_SET]
+            if tau < tau0:
+                # coolant pre-warming, no flow
+                P_pre = C * (T_first - Tw) / max(tau0 - tau, dt)
+                P_pre = min(surplus, max(0.0, P_pre))
+                P_heat = P_pre
+            else:
+                T_tgt = T_first if tau + dt < tau_pos else interp1(tau + dt, ts, tab_start[:, 5])
+                T_tgt = max(T_in + 1.0, T_tgt)
+                P_pre = min(surplus, max(0.0, C * (T_tgt - Tw) / dt))
+                P_heat = P_tab + P_pre
+                if P_tab > 0.0:
+                    dTs = max(T_tgt - T_in, 1.0)
+                    tc = max(p[TAU_PUMP], 3.0 * dt)
+                    m_ff = P_tab / (CP * dTs)
+                    # only the reducing side of the correction: a content warmer than the falling
+                    # table temperature is not flushed out (delivered heat stays the measured one)
+                    m_pump = m_ff + min(0.0, C * (Tw - T_tgt) / (CP * dTs * tc))
+                    m_pump = min(p[M_PUMP_MAX], max(0.0, m_pump))
+        else:
+            mode = 2.0 if H > 0.0 else 3.0
+            span = 1.0 - p[M_MIN]
+            frac = (m - p[M_MIN]) / span if span > 0.0 else 1.0
+            eta_el = p[ETA_EL_MIN] + (p[ETA_EL_MAX] - p[ETA_EL_MIN]) * frac
+            P_el = p[M_MIN] * p[P_EL_MAX] + (p[P_EL_MAX] - p[M_MIN] * p[P_EL_MAX]) * frac
+            P_fuel = P_el / eta_el
+            P_heat = max(0.0, P_fuel * (eta_tot - eta_el) - p[P_HEATUP] * H)
+            if P_heat > 0.0:
+                T_tgt = p[T_SUP_SET]
+                dTs = max(T_tgt - T_in, 1.0)
+                tc = max(p[TAU_PUMP], 3.0 * dt)
+                m_pump = P_heat / (CP * dTs) + C * (Tw - T_tgt) / (CP * dTs * tc)
+                m_pump = min(p[M_PUMP_MAX], max(0.0, m_pump))
+        x[X_MLAST] = m_pump
+        x[X_RUNSEC] += dt
+    else:
+        dy = -x[X_Y]
+        lim = p[SLEW] * dt
+        x[X_Y] += min(lim, max(-lim, dy))
+        tau_off = t - x[X_TOFF]
+        if x[X_STARTS] > 0.5 and tau_off < p[T_STOP]:
+            mode = 4.0
+            tc_ = tab_cool[:, 0]
+            m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X_MSTOP]
+            P_el = interp1(tau_off, tc_, tab_cool[:, 3])
+            T_cd = interp1(tau_off, tc_, tab_cool[:, 1])
+            P_heat = m_pump * CP * max(0.0, T_cd - T_in)
+        else:
+            P_el = -p[P_IDLE]
+            mode = 5.0 if on > 0.5 else 0.0
+    m_flow = max(m_pump, m_ext)
+    dT, T_out = _water(Tw, P_heat, m_flow, T_in, C, dt)
+    x[X_TW] = Tw + dT
+    x[X_EFUEL] += P_fuel * dt
+    x[X_EEL] += P_el * dt
+    x[X_EHEAT] += P_heat * dt
+    return m_flow, T_out, P_el, P_fuel, P_heat, mode

@@ -1,0 +1,224 @@
+"""Heat pumps of the CoSES houses: air/water Wolf CHA-10 (modulating) and brine/water Wolf BWS-1-10 (on/off), heating mode.
+
+Physics in words
+----------------
+Both follow the CoSES ProHMo twins (upstream ``WolfCHA.mo`` and ``WolfBWS.mo``).  The compressor
+heat and electric power are nominal values times measured factor tables over the heat-pump outlet
+temperature T_hp = max(T_out_min, T_in + dT) (rows, in K) and the outside air temperature and
+modulation (CHA-10: product of two tables) or the brine inlet temperature clamped to ≤ 20 °C
+(BWS-1-10).  The water-side spread is fixed (dT = 5 K): own flow = P_heat,HP/(CP·dT).  An electric
+back-up heater in the outlet adds 0/2/4/6 kW for aux = 0 / (0, 1/3] / (1/3, 2/3] / > 2/3 (an aux
+request alone also starts the unit; with the CHA-10 any aux stage forces the compressor request to
+1).  The CHA-10 modulation is rate-limited (±slew) and clamped to [m_min, 1]; after a start it
+delivers nothing for t_start (10 s; BWS-1-10: 300 s); below T_defrost (5 °C) outside it defrosts for
+the last 60 s of every 1800 s of run time (no heat, no power, no flow; a defrost is completed
+before the unit stops).  Heating runs only while T_in < T_ret_max (68 °C); the BWS-1-10 also needs
+a brine inlet above T_src_min (−5 °C).  Off / stop: −P_idle, no flow.
+
+Conventions and choices
+-----------------------
+* P_el ≤ 0 (consumed) = −(compressor + aux).  P_heat = compressor heat + aux heat, released into
+  the water; no water content, so P_heat = m_flow·CP·(T_out − T_in) exactly, with
+  m_flow = max(own flow, m_ext) and T_out from that balance.  (Upstream sets T_out = T_hp + aux
+  rise, which differs from the balance when T_in + dT < T_out_min; the floor is kept for the
+  table lookup only.)
+* BWS-1-10: heat taken from the brine Q_src = P_heat + P_el = compressor heat − compressor power
+  (accumulated in state E_src); the brine side model (ground collector) is not part of this unit.
+* The start delay is applied to every start (upstream skips it for a start at t = 0).
+  Cooling mode is not implemented (irrelevant for the houses' heating use; upstream's cooling
+  tables are all ones).
+
+Parameters: ``ParamsAir`` (CHA-10), ``ParamsBrine`` (BWS-1-10).  Data source: upstream
+DZinsmeister/CoSES_thermal_ProHMo, ``HeatGenerator/LaboratoryModels/Data/WolfCHA10/`` and
+``.../Data/WolfBWS1_10/``, copied to ``plant/data/heat_pump_wolf_cha10/`` and
+``plant/data/heat_pump_wolf_bws1_10/``.
+Assumptions: table lookups clamp at the grid edges (upstream extrapolates linearly).
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+from ..tables import interp2, read_tables
+from ..water import CP
+
+DATA_AIR = Path(__file__).resolve().parent.parent / "data" / "heat_pump_wolf_cha10"
+DATA_BRINE = Path(__file__).resolve().parent.parent / "data" / "heat_pump_wolf_bws1_10"
+
+
+@dataclass(frozen=True)
+class ParamsAir:
+    P_heat_nom: float = param(5750.0, "W", "heat output at A2/W35 part load (table normalisation)", 100.0, 1e6)
+    COP_nom: float = param(4.65, "1", "COP at the normalisation point (P_el,nom = P_heat_nom/COP_nom)", 1.0, 10.0)
+    P_aux_stage: float = param(2000.0, "W", "power of one of the 3 back-up heater stages", 0.0, 1e5)
+    dT: float = param(5.0, "K", "fixed water-side spread", 1.0, 20.0)
+    T_ret_max: float = param(68.0, "degC", "heating runs only while the return is below this", 20.0, 90.0)
+    T_out_min: float = param(15.0, "degC", "lower clamp of the table outlet temperature", 0.0, 40.0)
+    m_min: float = param(0.2, "1", "minimum modulation", 0.0, 1.0)
+    slew: float = param(0.025, "1/s", "rate limit of the modulation", 1e-4, 10.0)
+    t_start: float = param(10.0, "s", "start delay without output", 0.0, 600.0)
+    t_defrost: float = param(60.0, "s", "length of one defrost", 0.0, 600.0)
+    t_defrost_period: float = param(1800.0, "s", "run time per defrost cycle", 60.0, 86400.0)
+    T_defrost: float = param(5.0, "degC", "outside temperature below which the unit defrosts", -30.0, 20.0)
+    P_idle: float = param(15.0, "W", "stand-by electric consumption", 0.0, 1000.0)
+
+
+@dataclass(frozen=True)
+class ParamsBrine:
+    P_heat_nom: float = param(10800.0, "W", "heat output at B0/W35 (table normalisation)", 100.0, 1e6)
+    COP_nom: float = param(4.7, "1", "COP at B0/W35 (P_el,nom = P_heat_nom/COP_nom)", 1.0, 10.0)
+    P_aux_stage: float = param(2000.0, "W", "power of one of the 3 back-up heater stages", 0.0, 1e5)
+    dT: float = param(5.0, "K", "fixed water-side spread", 1.0, 20.0)
+    T_ret_max: float = param(68.0, "degC", "heating runs only while the return is below this", 20.0, 90.0)
+    T_out_min: float = param(20.0, "degC", "lower clamp of the table outlet temperature", 0.0, 40.0)
+    T_src_min: float = param(-5.0, "degC", "the unit runs only while the brine inlet is above this", -30.0, 20.0)
+    T_src_max: float = param(20.0, "degC", "upper clamp of the brine temperature for the table", 0.0, 40.0)
+    t_start: float = param(300.0, "s", "start delay without output", 0.0, 3600.0)
+    P_idle: float = param(15.0, "W", "stand-by electric consumption", 0.0, 1000.0)
+
+
+A_P_HEAT_NOM, A_COP_NOM, A_P_AUX_STAGE, A_DT, A_T_RET_MAX, A_T_OUT_MIN, A_M_MIN = range(7)
+A_SLEW, A_T_START, A_T_DEFROST, A_T_DEFROST_PERIOD, A_T_DEFROST_AMB, A_P_IDLE = range(7, 13)
+B_P_HEAT_NOM, B_COP_NOM, B_P_AUX_STAGE, B_DT, B_T_RET_MAX, B_T_OUT_MIN = range(6)
+B_T_SRC_MIN, B_T_SRC_MAX, B_T_START, B_P_IDLE = range(6, 10)
+
+STATES = ("y", "t_on", "running", "starts", "run_seconds", "E_el", "E_heat", "E_src")
+X_Y, X_TON, X_RUN, X_STARTS, X_RUNSEC, X_EEL, X_EHEAT, X_ESRC = range(8)
+
+
+def initial_state(params) -> np.ndarray:
+    """Initial state (same layout for both models); the unit is off."""
+    return np.zeros(len(STATES), dtype=np.float64)
+
+
+@functools.cache
+def tables_air() -> tuple[np.ndarray, ...]:
+    """(el_amb, q_amb, el_mod, q_mod) of the CHA-10: factors over (T_hp K, T_amb K) and (T_hp K, m)."""
+    amb = read_tables(DATA_AIR / "CHA10_TAmbHeat.txt")
+    mod = read_tables(DATA_AIR / "CHA10_ModulationHeat.txt")
+    return amb["PEl"], amb["QHeat"], mod["PEl"], mod["QHeat"]
+
+
+@functools.cache
+def tables_brine() -> tuple[np.ndarray, ...]:
+    """(el, q) of the BWS-1-10: factors over (T_hp K, T_src K)."""
+    t = read_tables(DATA_BRINE / "BWS1_10.txt")
+    return t["PEl"], t["QHeat"]
+
+
+@njit(cache=True, inline="always")
+def _aux_power(aux, stage):
+    if aux <= 0.0:
+        return 0.0
+    if aux <= 0.33:
+        return stage
+    if aux <= 0.67:
+        return 2.0 * stage
+    return 3.0 * stage
+
+
+@njit(cache=True)
+def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m_ext, T_in):
+    """Advance the CHA-10 by dt from t; returns (m_flow, T_out, P_el, P_heat, mode)."""
+    want = (on > 0.5 or aux > 0.0) and T_in < p[A_T_RET_MAX]
+    running = x[X_RUN] > 0.5
+    defrost = False
+    if running:
+        tau = t - x[X_TON]
+        defrost = (T_amb < p[A_T_DEFROST_AMB] and tau >= p[A_T_START]
+                   and (tau % p[A_T_DEFROST_PERIOD]) >= p[A_T_DEFROST_PERIOD] - p[A_T_DEFROST])
+        if not want and not defrost:
+            x[X_RUN] = 0.0
+            running = False
+    elif want:
+        x[X_RUN] = 1.0
+        x[X_TON] = t
+        x[X_STARTS] += 1.0
+        running = True
+    P_aux = _aux_power(aux, p[A_P_AUX_STAGE])
+    if running:
+        target = 1.0 if P_aux > 0.0 else min(1.0, max(0.0, y_set))
+        if t - x[X_TON] < p[A_T_START]:
+            target = 1.0
+    else:
+        target = 0.0
+    lim = p[A_SLEW] * dt
+    x[X_Y] += min(lim, max(-lim, target - x[X_Y]))
+    m_own = 0.0
+    P_heat = 0.0
+    P_el = -p[A_P_IDLE]
+    mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
+    if running:
+        x[X_RUNSEC] += dt
+        if t - x[X_TON] < p[A_T_START]:
+            mode = 1.0
+            P_el = 0.0
+        elif defrost:
+            mode = 7.0
+            P_el = 0.0
+        else:
+            mode = 3.0
+            m = min(1.0, max(p[A_M_MIN], x[X_Y]))
+            Tk = max(p[A_T_OUT_MIN], T_in + p[A_DT]) + 273.15
+            Ta = T_amb + 273.15
+            Q_hp = interp2(Tk, Ta, q_amb) * interp2(Tk, m, q_mod) * p[A_P_HEAT_NOM]
+            P_hp = interp2(Tk, Ta, el_amb) * interp2(Tk, m, el_mod) * p[A_P_HEAT_NOM] / p[A_COP_NOM]
+            m_own = Q_hp / (CP * p[A_DT])
+            P_heat = Q_hp + P_aux
+            P_el = -(P_hp + P_aux)
+    m_flow = max(m_own, m_ext)
+    if m_flow <= 0.0:
+        P_heat = 0.0
+    T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
+    x[X_EEL] += P_el * dt
+    x[X_EHEAT] += P_heat * dt
+    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
+    return m_flow, T_out, P_el, P_heat, mode
+
+
+@njit(cache=True)
+def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
+    """Advance the BWS-1-10 by dt from t; returns (m_flow, T_out, P_el, P_heat, mode).
+
+    Heat taken from the brine this step: P_heat + P_el (= compressor heat − compressor power).
+    """
+    want = (on > 0.5 or aux > 0.0) and T_in < p[B_T_RET_MAX] and T_src > p[B_T_SRC_MIN]
+    if x[X_RUN] > 0.5 and not want:
+        x[X_RUN] = 0.0
+    elif x[X_RUN] < 0.5 and want:
+        x[X_RUN] = 1.0
+        x[X_TON] = t
+        x[X_STARTS] += 1.0
+    running = x[X_RUN] > 0.5
+    m_own = 0.0
+    P_heat = 0.0
+    P_el = -p[B_P_IDLE]
+    mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
+    if running:
+        x[X_RUNSEC] += dt
+        if t - x[X_TON] < p[B_T_START]:
+            mode = 1.0
+            P_el = 0.0
+        else:
+            mode = 3.0
+            P_aux = _aux_power(aux, p[B_P_AUX_STAGE])
+            Tk = max(p[B_T_OUT_MIN], T_in + p[B_DT]) + 273.15
+            Ts = min(p[B_T_SRC_MAX], T_src) + 273.15
+            Q_hp = interp2(Tk, Ts, q_tab) * p[B_P_HEAT_NOM]
+            P_hp = interp2(Tk, Ts, el_tab) * p[B_P_HEAT_NOM] / p[B_COP_NOM]
+            m_own = Q_hp / (CP * p[B_DT])
+            P_heat = Q_hp + P_aux
+            P_el = -(P_hp + P_aux)
+    m_flow = max(m_own, m_ext)
+    if m_flow <= 0.0:
+        P_heat = 0.0
+    T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
+    x[X_EEL] += P_el * dt
+    x[X_EHEAT] += P_heat * dt
+    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
+    return m_flow, T_out, P_el, P_heat, mode

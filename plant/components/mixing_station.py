@@ -1,0 +1,57 @@
+"""Heating-circuit mixing station: 3-way mixing valve with finite actuator speed and a pump.
+
+The pump delivers the requested building-side flow up to its maximum. The valve mixes primary
+supply water (from the hydraulic switch) with the circuit's own return; its position y is the
+primary share. The valve controller aims at the set supply temperature with a feed-forward
+position y* = (T_set - T_ret)/(T_primary - T_ret), corrected by an integral term on the measured
+supply temperature, and the actuator moves at most 1/t_stroke per second (a 3-point actuator).
+Measured: building-side flow and supply temperature after mixing, primary (storage-side) flow.
+Mass balance: primary flow in = primary flow out = y x m_flow; exact energy follows from mixing.
+
+| parameter | unit | meaning |
+|---|---|---|
+| m_flow_max | kg/s | pump maximum (15 l/min) |
+| t_stroke | s | actuator running time for a full stroke |
+| K_i | 1/(K s) | integral gain of the supply-temperature correction |
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+
+STATES = ("y", "y_integral")
+
+
+@dataclass(frozen=True)
+class Params:
+    m_flow_max: float = param(0.25, "kg/s", "pump maximum flow (15 l/min)", 0.001, 10)
+    t_stroke: float = param(120.0, "s", "valve actuator running time 0 -> 100 %", 1, 3600)
+    K_i: float = param(2.0e-4, "1/(K s)", "integral gain on the supply-temperature error", 0, 1)
+
+
+M_FLOW_MAX, T_STROKE, K_I = range(3)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    return np.zeros(2, dtype=np.float64)
+
+
+@njit(cache=True)
+def step(dt, x, p, T_set, m_flow_set, T_primary, T_ret):
+    """Move the valve for dt; returns (m_flow, m_flow_primary, T_sup after mixing, y)."""
+    m = min(max(m_flow_set, 0.0), p[M_FLOW_MAX])
+    y = x[0]
+    T_sup = y * T_primary + (1.0 - y) * T_ret
+    if m > 0.0:
+        span = T_primary - T_ret
+        y_ff = (T_set - T_ret) / span if span > 0.1 else 1.0
+        x[1] = min(max(x[1] + dt * p[K_I] * (T_set - T_sup), -0.3), 0.3)
+        target = min(max(y_ff + x[1], 0.0), 1.0)
+        dy = target - y
+        lim = dt / p[T_STROKE]
+        x[0] = y + min(max(dy, -lim), lim)
+    return m, y * m, T_sup, y

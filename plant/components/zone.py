@@ -1,0 +1,87 @@
+"""Living zone of the building: a two-node (air + envelope mass) thermal model with gains.
+
+Physics: the room node (air and furniture, capacity C_room) exchanges heat with the outdoor air
+through windows, leakage and ventilation (H_direct) and with the envelope mass node (H_mass);
+the mass node (capacity C_mass) loses heat to outdoors through the opaque walls (H_envelope).
+Gains into the room node: radiator heat, people (presence x persons x 110 W), household
+electricity (all of it ends as heat), half of the solar gain (the other half heats the mass).
+Solar gain through windows = A_solar x (f_dir x beam + f_dif x diffuse horizontal irradiance).
+
+Applicability: heating-season dynamics of a whole dwelling (hours to days). It lumps the
+original's three-zone building with unheated roof and cellar into H values; the numbers below
+are the reference's best-effort envelope of house 1 (class 1995-2001, 300 m2, 2 floors) and should
+be calibrated against recordings rather than trusted to the watt.
+
+| parameter   | unit | meaning |
+|-------------|------|---------|
+| C_room      | J/K  | air + furniture + inner surfaces |
+| C_mass      | J/K  | envelope and slabs |
+| H_direct    | W/K  | windows 105 + leakage 123 + half the ceiling/floor to roof/cellar |
+| H_mass      | W/K  | room <-> mass surface coupling |
+| H_envelope  | W/K  | opaque walls to outdoors |
+| A_solar     | m2   | effective solar aperture g*A_win*(1-0.4)*(1-0.4) = 0.6*58.5*0.36 |
+| persons     | 1    | residents |
+Validated by tests/plant/test_zone.py (steady state = gains/H, energy balance).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+
+STATES = ("T_room", "T_mass")
+
+
+@dataclass(frozen=True)
+class Params:
+    C_room: float = param(12.0e6, "J/K", "room air, furniture and inner surfaces", 1e5, 1e9)
+    C_mass: float = param(80.0e6, "J/K", "envelope and floor slabs", 1e6, 1e10)
+    H_direct: float = param(300.0, "W/K", "room to outdoor air: windows, leakage, ventilation", 0, 1e4)
+    H_mass: float = param(2000.0, "W/K", "room to envelope mass", 1, 1e5)
+    H_envelope: float = param(170.0, "W/K", "envelope mass to outdoor air", 0, 1e4)
+    A_solar: float = param(12.6, "m2", "effective solar aperture of the windows", 0, 500)
+    f_dir: float = param(0.45, "1", "share of horizontal beam irradiance reaching the windows", 0, 2)
+    f_dif: float = param(0.5, "1", "share of horizontal diffuse irradiance reaching the windows", 0, 2)
+    persons: float = param(6.0, "1", "residents", 0, 100)
+    P_person: float = param(110.0, "W", "sensible heat per person at home", 0, 300)
+    T_day: float = param(21.0, "degC", "room set-point by day", 5, 30)
+    T_night: float = param(18.0, "degC", "room set-point at night (night reduction)", 5, 30)
+    night_start: float = param(23.0, "h", "night reduction starts (local time)", 0, 24)
+    night_end: float = param(7.0, "h", "night reduction ends (local time)", 0, 24)
+    T_init: float = param(21.0, "degC", "initial room and mass temperature", -10, 40)
+
+
+C_ROOM, C_MASS, H_DIRECT, H_MASS, H_ENVELOPE, A_SOLAR, F_DIR, F_DIF, PERSONS, P_PERSON = range(10)
+T_DAY, T_NIGHT, NIGHT_START, NIGHT_END, T_INIT = range(10, 15)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    return np.array([params.T_init, params.T_init], dtype=np.float64)
+
+
+@njit(cache=True)
+def setpoint(p, tau):
+    """Room set-point [degC] at local time tau [s since the year start]."""
+    hour = (tau % 86400.0) / 3600.0
+    start, end = p[NIGHT_START], p[NIGHT_END]
+    if start > end:
+        night = hour >= start or hour < end
+    else:
+        night = start <= hour < end
+    return p[T_NIGHT] if night else p[T_DAY]
+
+
+@njit(cache=True)
+def step(dt, x, p, T_out, E_dir, E_dif, presence, P_el_household, Q_heating):
+    """Advance the zone by dt; returns (Q_gains_internal, Q_solar, Q_loss) [W]."""
+    T_r, T_m = x[0], x[1]
+    Q_int = presence * p[PERSONS] * p[P_PERSON] + P_el_household
+    Q_sol = p[A_SOLAR] * (p[F_DIR] * E_dir + p[F_DIF] * E_dif)
+    Q_rm = p[H_MASS] * (T_r - T_m)
+    Q_loss = p[H_DIRECT] * (T_r - T_out) + p[H_ENVELOPE] * (T_m - T_out)
+    x[0] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[H_DIRECT] * (T_r - T_out)) / p[C_ROOM]
+    x[1] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[H_ENVELOPE] * (T_m - T_out)) / p[C_MASS]
+    return Q_int, Q_sol, Q_loss

@@ -1,0 +1,1 @@
+"""Built-in controllers: the case-study rule set and the building's room thermostat."""

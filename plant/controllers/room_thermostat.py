@@ -1,0 +1,54 @@
+"""The building's heating controller: supply-temperature request and a PI room thermostat.
+
+Supply temperature: constant (the original house: 60 degC) or a weather-compensated heating
+curve T_sup = T_room_set + slope x (T_room_set - T_out) + offset, clamped to [T_min, T_max].
+Flow: a PI controller on the room temperature error drives the circuit flow between 0 and the
+pump maximum (the original's fast on/off thermostat with a 0.01 K band replaced by PI, as the
+reference suggests, so that the flow is smooth and steps of 1-60 s behave alike).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+
+STATES = ("integral",)
+
+
+@dataclass(frozen=True)
+class Params:
+    curve: bool = param(False, "-", "true: weather-compensated heating curve; false: constant supply")
+    T_sup_constant: float = param(60.0, "degC", "supply temperature request without heating curve", 20, 95)
+    slope: float = param(1.2, "1", "heating-curve slope", 0.1, 4)
+    offset: float = param(0.0, "K", "heating-curve parallel shift", -20, 20)
+    T_sup_min: float = param(30.0, "degC", "heating-curve minimum", 15, 95)
+    T_sup_max: float = param(70.0, "degC", "heating-curve maximum", 15, 95)
+    m_flow_max: float = param(0.25, "kg/s", "flow at full demand", 0.001, 10)
+    K_p: float = param(1.0, "1/K", "proportional gain (share of maximum flow per K)", 0, 100)
+    T_i: float = param(1800.0, "s", "integral time", 10, 1e6)
+
+
+CURVE, T_SUP_CONSTANT, SLOPE, OFFSET, T_SUP_MIN, T_SUP_MAX, M_FLOW_MAX, K_P, T_I = range(9)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    return np.zeros(1, dtype=np.float64)
+
+
+@njit(cache=True)
+def step(dt, x, p, T_room, T_room_set, T_out):
+    """Returns (T_sup_set [degC], m_flow_set [kg/s])."""
+    if p[CURVE] > 0.5:
+        T_sup = T_room_set + p[SLOPE] * (T_room_set - T_out) + p[OFFSET]
+        T_sup = min(max(T_sup, p[T_SUP_MIN]), p[T_SUP_MAX])
+    else:
+        T_sup = p[T_SUP_CONSTANT]
+    e = T_room_set - T_room
+    u = p[K_P] * e + x[0]
+    if 0.0 < u < 1.0 or (u <= 0.0 and e > 0.0) or (u >= 1.0 and e < 0.0):
+        x[0] += dt * p[K_P] * e / p[T_I]  # conditional integration: no wind-up at the limits
+    u = min(max(u, 0.0), 1.0)
+    return T_sup, u * p[M_FLOW_MAX]

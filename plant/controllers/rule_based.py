@@ -1,0 +1,61 @@
+"""The case study's rule-based supervisory controller (edge-triggered hysteresis switches).
+
+Published rule set: CHP on when the heating-storage top < 65 degC, boiler on when the top
+< 60 degC, both off when the storage bottom > 70 degC; DHW charging on when the DHW top < 50 degC
+and it is below the heating-storage top, off when the DHW top > 65 degC (and also when the
+heating-storage top has fallen below the DHW top, so charging never cools the DHW tank).
+"Top" and "bottom" are configurable sensor positions (1 = bottom ... 10 = top, as the lab's
+TS_S_TM_BT_1..10); defaults are the literal reading, sensors 10 and 1. Each actuator keeps its
+state between its on and off conditions. Outputs: CHP on + modulation 1, boiler 10 V demand,
+DHW charging pump on. An actuator driven from outside (gateway) is not written by this controller.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import param
+
+STATES = ("chp_on", "boiler_on", "dhw_on")
+
+
+@dataclass(frozen=True)
+class Params:
+    chp_on_below: float = param(65.0, "degC", "CHP starts when the storage top is below", 20, 95)
+    boiler_on_below: float = param(60.0, "degC", "boiler starts when the storage top is below", 20, 95)
+    off_above: float = param(70.0, "degC", "CHP and boiler stop when the storage bottom is above", 20, 95)
+    dhw_on_below: float = param(50.0, "degC", "DHW charging starts when the DHW top is below", 20, 95)
+    dhw_off_above: float = param(65.0, "degC", "DHW charging stops when the DHW top is above", 20, 95)
+    top_sensor: int = param(10, "1", "storage sensor used as 'top' (1 = bottom ... 10 = top)", 1, 10)
+    bottom_sensor: int = param(1, "1", "storage sensor used as 'bottom'", 1, 10)
+    dhw_top_sensor: int = param(10, "1", "DHW storage sensor used as 'top'", 1, 10)
+    chp_modulation: float = param(1.0, "1", "CHP modulation when on", 0.55, 1.0)
+    boiler_demand: float = param(10.0, "V", "boiler 0-10 V demand when on", 2.1, 10.0)
+
+
+(CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, TOP_SENSOR, BOTTOM_SENSOR,
+ DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND) = range(10)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    return np.zeros(3, dtype=np.float64)
+
+
+@njit(cache=True)
+def step(x, p, T_top, T_bottom, T_dhw_top):
+    """Update the hysteresis states; returns (chp_on, chp_y_set, boiler_U_set, dhw_pump_on)."""
+    if T_bottom > p[OFF_ABOVE]:
+        x[0] = 0.0
+        x[1] = 0.0
+    else:
+        if T_top < p[CHP_ON_BELOW]:
+            x[0] = 1.0
+        if T_top < p[BOILER_ON_BELOW]:
+            x[1] = 1.0
+    if T_dhw_top > p[DHW_OFF_ABOVE] or T_top < T_dhw_top:
+        x[2] = 0.0
+    elif T_dhw_top < p[DHW_ON_BELOW] and T_dhw_top < T_top:
+        x[2] = 1.0
+    return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]

@@ -1,0 +1,172 @@
+"""House files: load `plant/houses/<name>.toml` (or a path), validate everything, report all problems.
+
+Messages name the file, the line, the key and what is allowed, e.g.
+    plant/houses/house1.toml:42 [storage] n_layers = 0: out of range; allowed 3 … 200 1
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, fields
+from difflib import get_close_matches
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .component import build_params
+from .components import boiler, chp, mixing_station, pipe, radiator, storage, zone, dhw
+from .controllers import room_thermostat, rule_based
+from .errors import ConfigError
+
+HOUSES = Path(__file__).parent / "houses"
+
+# section -> Params class, for the two-generator topology
+COMPONENTS = {
+    "chp": chp.Params,
+    "boiler": boiler.Params,
+    "storage": storage.Params,
+    "dhw_storage": storage.Params,
+    "zone": zone.Params,
+    "radiator": radiator.Params,
+    "mixer": mixing_station.Params,
+    "thermostat": room_thermostat.Params,
+    "dhw": dhw.Params,
+    "controller": rule_based.Params,
+    "supply_header": pipe.Params,
+    "return_header": pipe.Params,
+}
+TOPOLOGIES = ("two_generator_switch",)
+
+
+@dataclass(frozen=True)
+class Connections:
+    """Port heights and loop parameters of the two-generator topology (SI, heights in m)."""
+
+    storage_top_port: float = 1.60
+    storage_bottom_port: float = 0.03
+    dhw_draw_port: float = 1.48
+    dhw_cold_port: float = 0.03
+    dhw_coil_top: float = 1.21
+    dhw_coil_bottom: float = 0.75
+    dhw_coil_UA: float = 640.0
+    dhw_pump_flow: float = 0.333
+    storage_soc_T0: float = 40.0
+    storage_soc_Tmax: float = 80.0
+    dhw_soc_T0: float = 15.0
+    dhw_soc_Tmax: float = 80.0
+
+
+@dataclass(frozen=True)
+class HouseSpec:
+    name: str
+    path: Path
+    description: str
+    start: str
+    household_kwh_per_year: float
+    dhw_litres_per_day: float
+    params: dict  # section -> Params instance
+    connections: Connections
+
+
+def resolve(name_or_path: str | Path) -> Path:
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists():
+        if not p.exists():
+            raise ConfigError(f"{p}: no such house file")
+        return p
+    candidate = HOUSES / f"{name_or_path}.toml"
+    if not candidate.exists():
+        known = sorted(f.stem for f in HOUSES.glob("*.toml"))
+        raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)}")
+    return candidate
+
+
+def _line(text: str, section: str, key: str | None = None) -> int:
+    """Line number of [section] (or of key inside it) in the TOML text; 0 when not found."""
+    lines = text.splitlines()
+    start = None
+    for i, line in enumerate(lines, 1):
+        if re.match(rf"^\s*\[{re.escape(section)}\]\s*(#.*)?$", line):
+            start = i
+            if key is None:
+                return i
+            continue
+        if start is not None:
+            if re.match(r"^\s*\[", line):
+                break
+            if re.match(rf"^\s*{re.escape(key)}\s*=", line):
+                return i
+    return start or 0
+
+
+def load(name_or_path: str | Path) -> HouseSpec:
+    path = resolve(name_or_path)
+    text = path.read_text()
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    problems: list[str] = []
+    allowed = set(COMPONENTS) | {"house", "profiles", "connections"}
+    for section in doc:
+        if section not in allowed:
+            close = get_close_matches(section, allowed, n=2)
+            hint = f"did you mean [{'], ['.join(close)}]?" if close else f"allowed: {', '.join(sorted(allowed))}"
+            problems.append(f"{path}:{_line(text, section)} [{section}]: unknown component; {hint}")
+    house = doc.get("house", {})
+    for key in ("name", "topology"):
+        if key not in house:
+            problems.append(f"{path}:{_line(text, 'house')} [house] {key}: missing; add e.g. "
+                            f"{key} = \"{'two_generator_switch' if key == 'topology' else path.stem}\"")
+    if house.get("topology", TOPOLOGIES[0]) not in TOPOLOGIES:
+        problems.append(f"{path}:{_line(text, 'house', 'topology')} [house] topology = "
+                        f"{house['topology']!r}: unknown; allowed: {', '.join(TOPOLOGIES)}")
+    params = {}
+    for section, cls in COMPONENTS.items():
+        values = doc.get(section, {})
+        if not isinstance(values, dict):
+            problems.append(f"{path}:{_line(text, section)} {section}: must be a table [{section}]")
+            continue
+        try:
+            params[section] = build_params(cls, values, f"[{section}]")
+        except ConfigError as exc:
+            for msg in str(exc).splitlines():
+                key = msg.split("] ", 1)[1].split(" ", 1)[0] if "] " in msg else None
+                problems.append(f"{path}:{_line(text, section, key)} {msg}")
+    conn_values = doc.get("connections", {})
+    conn_fields = {f.name for f in fields(Connections)}
+    for key in conn_values:
+        if key not in conn_fields:
+            close = get_close_matches(key, conn_fields, n=2)
+            problems.append(f"{path}:{_line(text, 'connections', key)} [connections] {key}: unknown; "
+                            + (f"did you mean {', '.join(close)}?" if close else f"allowed: {', '.join(sorted(conn_fields))}"))
+    connections = Connections(**{k: float(v) for k, v in conn_values.items() if k in conn_fields})
+    for sec, top, bot in (("storage", "storage_top_port", "storage_bottom_port"),
+                          ("dhw_storage", "dhw_draw_port", "dhw_cold_port"),
+                          ("dhw_storage", "dhw_coil_top", "dhw_coil_bottom")):
+        if sec in params:
+            H = params[sec].height
+            for key in (top, bot):
+                v = getattr(connections, key)
+                if not 0.0 <= v <= H:
+                    problems.append(f"{path}:{_line(text, 'connections', key)} [connections] {key} = {v}: "
+                                    f"outside the tank; allowed 0 … {H} m (the [{sec}] height)")
+            if getattr(connections, top) < getattr(connections, bot):
+                problems.append(f"{path}:{_line(text, 'connections', top)} [connections] {top} must be "
+                                f"above {bot}")
+    prof = doc.get("profiles", {})
+    kwh = prof.get("household_kwh_per_year", 6500.0)
+    litres = prof.get("dhw_litres_per_day", 300.0)
+    for key, v, hi in (("household_kwh_per_year", kwh, 1e6), ("dhw_litres_per_day", litres, 1e5)):
+        if not isinstance(v, (int, float)) or not 0 <= v <= hi:
+            problems.append(f"{path}:{_line(text, 'profiles', key)} [profiles] {key} = {v!r}: "
+                            f"must be a number 0 … {hi:g}")
+    if problems:
+        raise ConfigError("\n".join(problems))
+    return HouseSpec(
+        name=house["name"], path=path, description=house.get("description", ""),
+        start=str(house.get("start", "2021-01-01")), household_kwh_per_year=float(kwh),
+        dhw_litres_per_day=float(litres), params=params, connections=connections,
+    )

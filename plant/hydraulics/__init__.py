@@ -1,0 +1,1 @@
+"""The coupling point between generators, storage and consumers (one interface, swappable models)."""

@@ -1,0 +1,68 @@
+"""Signals and the signal catalogue: stable dotted names, units and causality, each with an index.
+
+Names are used at the edges (CLI, device maps, recordings, FMU bindings); the compiled loop uses
+the indices. The catalogue is frozen when a house is assembled; renaming a signal is a breaking
+change (listed in CHANGES.md).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from difflib import get_close_matches
+
+from .errors import SignalError
+
+CAUSALITIES = ("input", "output", "parameter", "state")
+
+
+@dataclass(frozen=True)
+class Signal:
+    name: str
+    unit: str
+    causality: str
+    description: str
+    index: int = -1
+
+
+class SignalCatalogue:
+    """An ordered, immutable set of signals with name -> index lookup."""
+
+    def __init__(self, signals: list[Signal]):
+        seen = {}
+        out = []
+        for i, s in enumerate(signals):
+            if s.name in seen:
+                raise SignalError(f"signal {s.name!r} declared twice")
+            if s.causality not in CAUSALITIES:
+                raise SignalError(f"signal {s.name!r}: causality {s.causality!r}; allowed {CAUSALITIES}")
+            s = Signal(s.name, s.unit, s.causality, s.description, i)
+            seen[s.name] = s
+            out.append(s)
+        self._by_name = seen
+        self._signals = tuple(out)
+
+    @property
+    def names(self) -> list[str]:
+        return [s.name for s in self._signals]
+
+    def __iter__(self):
+        return iter(self._signals)
+
+    def __len__(self) -> int:
+        return len(self._signals)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._by_name
+
+    def signal(self, name: str) -> Signal:
+        try:
+            return self._by_name[name]
+        except KeyError:
+            close = get_close_matches(str(name), self._by_name, n=3, cutoff=0.6)
+            hint = f"did you mean {', '.join(close)}?" if close else "list them with `twin signals HOUSE`"
+            raise SignalError(f"unknown signal {name!r}; {hint}") from None
+
+    def index(self, name: str) -> int:
+        return self.signal(name).index
+
+    def inputs(self) -> list[Signal]:
+        return [s for s in self._signals if s.causality == "input"]

@@ -1,0 +1,1 @@
+"""Time series that drive the house: weather, occupancy, household electricity, hot-water draws."""
