@@ -222,6 +222,8 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         s[S_boiler__run_hours] = x_b[int(p_sys[SYS_B_X_RUNSEC])] / 3600.0
         s[S_boiler__E_heat] = x_b[int(p_sys[SYS_B_X_EHEAT])]
         s[S_boiler__E_fuel] = x_b[int(p_sys[SYS_B_X_EFUEL])]
+        sensors(T_st, s, I_ST_S1)  # end-of-step values: what the next step's controller sees
+        sensors(T_dw, s, I_DHW_S1)
         mean_st = T_st.mean()
         s[S_storage__T_top] = T_st[0]
         s[S_storage__T_bot] = T_st[n_st - 1]

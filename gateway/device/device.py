@@ -23,6 +23,7 @@ Public API (all methods are thread-safe; plant access goes through one PlantPort
 
   Time and logic:
     dev.tick(t)                                  # watchdog; call after each plant step
+    dev.reset()                                  # power-cycle the device state (tests)
     dev.status_word() -> int; dev.fault_code() -> int; dev.remote -> bool
 
   Faults (each reported as an event):
@@ -197,6 +198,15 @@ class Device:
         if self.faults.tripped:
             return self.faults.trip_code
         return self.map.fault.sensor_code if self.faults.sensor_fault else 0
+
+    def reset(self) -> None:
+        """Power-cycle: forget remote commands, faults, watchdog and read-only mode (no plant I/O)."""
+        with self._lock:
+            self._commanded.clear()
+            self.faults = FaultState()
+            self.read_only = False
+            if self.watchdog:
+                self.watchdog = Watchdog(self.map.watchdog)
 
     # ----------------------------------------------------------------- faults
     def inject_sensor_fault(self, point: str, kind: str = "open", delta: float = 0.0) -> None:

@@ -115,7 +115,7 @@ def _bindings(dmap: DeviceMap, catalogue: Any, house: str) -> list[Problem]:
                                f"plant {sig.causality}, not an input; bind it as signal"))
     for p in dmap.points:
         bound = p.signal or p.command
-        if bound and bound in catalogue:
+        if bound and bound in catalogue and p.type != "bool":
             unit = catalogue.signal(bound).unit
             if _norm(unit) != _norm(p.si_unit):
                 out.append(Problem("error", f"{dmap.path} [point {p.name}]: plant unit of {bound} "

@@ -29,6 +29,7 @@ from canopen.sdo import SdoAbortedError
 
 from gateway.maps import codec
 from gateway.maps.model import DeviceMap, Point
+from gateway.transports.base import Transport
 from gateway.transports.can_bus import FAULT_KINDS, error_message, fault_kind, open_bus, parse_bus_spec
 from plant.errors import TransportError
 
@@ -36,6 +37,9 @@ log = logging.getLogger(__name__)
 CO_TYPE = {"bool": dt.BOOLEAN, "uint16": dt.UNSIGNED16, "int16": dt.INTEGER16, "bits16": dt.UNSIGNED16,
            "uint32": dt.UNSIGNED32, "int32": dt.INTEGER32, "float32": dt.REAL32, "string": dt.VISIBLE_STRING}
 ACCESS = {"R": "ro", "RW": "rw", "W": "wo"}
+#: Record names of the manufacturer area (device-interfaces §2.7); PDO variables read "group.point".
+AREA_NAMES = {0x2000: "status", 0x2100: "measurements", 0x2200: "commands", 0x2300: "counters",
+              0x2400: "parameters", 0x2F00: "gateway"}
 N_PDO, DEFAULT_TPDO_EVENT_MS = 4, 1000
 PRE_OPERATIONAL, OPERATIONAL, STOPPED = 127, 5, 4
 PDO_INVALID = 1 << 31
@@ -65,13 +69,15 @@ def _record(od: ObjectDictionary, name: str, index: int, subs: list[tuple], arra
 
 
 def _point_var(parent, p: Point, index: int, sub: int) -> None:
-    notes = [p.desc.replace(";", ",").replace("\n", " "), f"unit {p.unit or '1'}", f"scale {p.scale:g}"]
+    # One line, no ';' (an inline comment in EDS): unit, scale and provenance for the reader.
+    notes = [p.desc, f"unit {p.unit or '1'}", f"scale {p.scale:g}"]
     if p.offset:
         notes.append(f"offset {p.offset:g}")
-    notes.append(f"ref {p.ref.replace(';', ',')}")
+    notes.append(f"ref {p.ref}")
     mappable = p.type != "string" and (p.pdo is not None or p.table == "input" or p.command is not None)
     var = _var(parent, p.name, index, sub, CO_TYPE[p.type], ACCESS[p.access],
-               mappable=mappable, description="; ".join(n for n in notes if n).replace(";", ","))
+               mappable=mappable,
+               description=", ".join(n for n in notes if n).replace(";", ",").replace("\n", " "))
     var.unit, var.factor = p.unit, p.scale
     if p.type in ("uint16", "int16", "uint32", "int32", "bits16") and p.range is not None:
         var.min, var.max = (int(codec.to_raw(p, v)) for v in p.range)
@@ -135,7 +141,7 @@ def build_object_dictionary(dmap: DeviceMap) -> ObjectDictionary:
         if len(members) == 1 and members[0][0] == 0:
             _point_var(od, members[0][1], index, 0)
             continue
-        rec = ODRecord(f"{dmap.id} 0x{index:04X}", index)
+        rec = ODRecord(AREA_NAMES.get(index, f"objects_{index:04X}"), index)
         _var(rec, "Highest sub-index supported", index, 0, dt.UNSIGNED8, "const", max(s for s, _ in members))
         for sub, p in sorted(members, key=lambda m: m[0]):
             _point_var(rec, p, index, sub)
@@ -286,8 +292,7 @@ class DeviceNode(canopen.LocalNode):
 
     # ---------------------------------------------------------------- bus callbacks
     def _on_sdo(self, can_id: int, data: bytes, timestamp: float) -> None:
-        if self.bus_off or self.state == STOPPED or self.device.link.mode != "none" and \
-                self.device.link.mode != "late":
+        if self.bus_off or self.state == STOPPED or self.device.link.mode in ("silent", "drop", "bad_crc"):
             return
         if self.device.link.mode == "late":
             time.sleep(min(self.device.link.delay_s, 1.0))   # holds the bus thread, like a slow node
@@ -431,8 +436,12 @@ class _FaultListener(can.Listener):
                 node.fault(kind)
 
 
-class CanopenTransport:
-    """Serves Devices as CANopen nodes on one bus spec ("virtual:house1", "socketcand:...")."""
+class CanopenTransport(Transport):
+    """Serves Devices as CANopen nodes on one bus spec ("virtual:house1", "socketcand:...").
+
+    Each Device becomes a node with its map's [canopen] node_id. Events (NMT changes, EMCY, CAN
+    faults, RPDO deadline misses) go to `on_event` and to each Device's event stream.
+    """
 
     name = "canopen"
 

@@ -38,7 +38,7 @@ Differences to the original (documented choices)
   flow-reducing side of the correction (a content warmer than the briefly falling table value is
   not flushed out).  With a small V_water (≤ 2 l) the outlet reproduces the rising part of col 6;
   with the default 12 l the fuel surplus (≈6 kW) can warm the content by only ≈0.12 K/s, so the
-  outlet lags the measured 57 → 80 °C rise of 743–825 s (≈68 °C at 825 s, 80 °C at ≈970 s; the
+  outlet lags the measured 57 → 80 °C rise of 743–825 s (≈70 °C at 825 s, 80 °C at ≈950 s; the
   measured rise implies an effective hot volume of ≈2–3 l).
 * Cool-down.  Own pump flow = col 3 · (pump flow just before the stop); the residual engine heat
   into the water is own_flow·CP·max(0, col 2 − T_in) (the original's delivered heat), which keeps
@@ -90,7 +90,7 @@ class Params:
     T_ret_min: float = param(20.0, "degC", "lower clamp of the efficiency-table lookup", 0.0, 60.0)
     P_idle: float = param(35.0, "W", "stand-by electric consumption", 0.0, 1000.0)
     slew: float = param(0.025, "1/s", "rate limit of the effective modulation", 1e-4, 10.0)
-    V_water: float = param(0.012, "m3", "water content of the unit (thermal inertia)", 1e-5, 1.0)
+    V_water: float = param(0.0025, "m3", "hot water content of the unit (thermal inertia; 2.5 l reproduces the measured start-up temperature rise)", 1e-5, 1.0)
     m_pump_max: float = param(0.25, "kg/s", "maximum flow of the internal pump", 1e-3, 5.0)
     tau_pump: float = param(5.0, "s", "time constant of the pump's temperature correction (>= 3 dt used)", 0.1, 600.0)
     initial_downtime: float = param(36000.0, "s", "downtime assumed before the simulation start", 0.0, 1e7)

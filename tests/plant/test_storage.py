@@ -167,7 +167,7 @@ def test_hot_charge_front_stays_sharp():
     assert np.all(np.diff(T) <= 1e-12)  # monotone: top hot, bottom cold
     assert T[0] > 69.9 and T[-1] < 20.01
     # the 50 % crossing sits at half height (front position = 400 kg / 20 kg per layer = layer 20)
-    k50 = np.interp(-45.0, -T, np.arange(len(T)))
+    k50 = np.interp(45.0, T[::-1], np.arange(40.0)[::-1])
     assert 19.0 < k50 < 21.5
     dz = P.height / P.n_layers
     w = _front_width(T, 20.0, 70.0)
@@ -200,7 +200,7 @@ def test_discharge_from_below_front_moves_up_sharp():
     _, _, oT, _ = _run(P, T, 2400, 1.0, inflow=_ports([39], [m], [20.0]), outflow=_ports([0], [m]))
     assert np.all(np.diff(T) <= 1e-12)
     assert oT[0] > 69.99
-    assert 18.5 < np.interp(45.0, T[::-1], np.arange(39, -1, -1.0)[::-1] * 0 + np.arange(40)[::-1]) < 21.0
+    assert 18.5 < np.interp(45.0, T[::-1], np.arange(40.0)[::-1]) < 21.0
     assert _front_width(T, 20.0, 70.0) < 3.6
 
 

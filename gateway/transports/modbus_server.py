@@ -1,0 +1,265 @@
+"""The pymodbus 3.16 adapter: the only module that imports pymodbus on the server side.
+
+One pymodbus server (TCP or RTU) serves several Devices, one unit id each. pymodbus's simulator
+API is used as the stack notes describe: one SimDevice per unit whose async `action` callback
+fills registers from the Device on reads and passes writes to the Device, returning an ExcCodes
+member for a Refusal. Subclassing datablocks is ignored by pymodbus 3.16, so live values must
+come through `action`.
+
+Two things pymodbus cannot do through `action` are done in a request-handler subclass:
+  * per-request context (client address, the real bit count of coil reads) and the per-device
+    function-code whitelist, checked before pymodbus touches the datastore;
+  * link faults (silent, late, dropped connection, corrupted RTU CRC), the per-device FC43/14
+    identification (pymodbus keeps one global identity), and silence for unknown unit ids.
+The server loop runs in its own thread; Device calls are thread-safe.
+"""
+from __future__ import annotations
+
+import asyncio
+import contextvars
+import logging
+import threading
+from collections.abc import Iterable
+from typing import Any
+
+from pymodbus.constants import ExcCodes
+from pymodbus.framer import FramerType
+from pymodbus.pdu import ExceptionResponse
+from pymodbus.pdu.mei_message import ReadDeviceInformationRequest, ReadDeviceInformationResponse
+from pymodbus.server import ModbusSerialServer, ModbusTcpServer
+from pymodbus.server.requesthandler import ServerRequestHandler
+from pymodbus.simulator import DataType, SimData, SimDevice
+
+from gateway.device.device import FC_TABLE, Device
+from gateway.maps.model import BIT_TABLES, TABLES
+from plant.errors import TransportError
+
+log = logging.getLogger(__name__)
+#: (device, pdu, client) of the request being served, for the action callback.
+_REQUEST: contextvars.ContextVar[tuple[Device, Any, str]] = contextvars.ContextVar("request")
+
+
+def _simdata(device: Device, table: str) -> list[SimData]:
+    """One block spanning the table's mapped addresses; the action decides what is mapped."""
+    points = [p for p in device.map.points if p.table == table]
+    if table in BIT_TABLES:
+        if not points:
+            return [SimData(0, values=False, datatype=DataType.BITS)]
+        lo = min(p.address for p in points)
+        hi = max(p.address for p in points)
+        return [SimData(lo, count=hi - lo + 1, values=False, datatype=DataType.BITS)]
+    if not points:
+        return [SimData(0, datatype=DataType.REGISTERS)]
+    lo = min(p.address for p in points)
+    hi = max(p.address + p.words for p in points)
+    return [SimData(lo, count=hi - lo, datatype=DataType.REGISTERS)]
+
+
+def _action(device: Device, transport: str):
+    async def action(fc: int, start: int, address: int, count: int, registers: list[int],
+                     values: list[int] | list[bool] | None) -> ExcCodes | None:
+        try:
+            _, pdu, client = _REQUEST.get((device, None, ""))
+            table = FC_TABLE.get(fc)
+            if table is None:
+                return ExcCodes.ILLEGAL_FUNCTION
+            if values is not None:
+                refusal = device.write_registers(table, address, [int(v) for v in values],
+                                                 client, transport)
+                return ExcCodes(refusal.modbus_code) if refusal else None
+            if table in BIT_TABLES:
+                # pymodbus passes the number of 16-bit words; the request holds the bit count.
+                n = getattr(pdu, "count", 0) if pdu is not None and fc in (1, 2) else 1
+                result = device.read_registers(table, address, max(n, 1))
+                if not isinstance(result, list):
+                    return ExcCodes(result.modbus_code)
+                for i, bit in enumerate(result):
+                    reg, pos = divmod(address + i, 16)
+                    reg -= start
+                    registers[reg] = (registers[reg] | (1 << pos)) if bit else (registers[reg] & ~(1 << pos))
+                return None
+            result = device.read_registers(table, address, count)
+            if not isinstance(result, list):
+                return ExcCodes(result.modbus_code)
+            registers[address - start:address - start + count] = result
+            return None
+        except Exception:  # server-loop boundary: log, answer 04, keep serving
+            log.exception("%s: action failed", device.id)
+            return ExcCodes.DEVICE_FAILURE
+    return action
+
+
+class _Handler(ServerRequestHandler):
+    """Per-connection handler: client identity, whitelist, FC43, link faults, no-reply cases."""
+
+    def __init__(self, owner: Any, *args: Any) -> None:
+        super().__init__(owner, *args)
+        self._corrupt = False
+
+    def _client(self) -> str:
+        peer = self.transport.get_extra_info("peername") if self.transport else None
+        if isinstance(peer, tuple):
+            return f"{peer[0]}:{peer[1]}"
+        return str(self.server.gw_port_name)
+
+    async def handle_request(self) -> None:
+        pdu = self.last_pdu
+        if not pdu:
+            return
+        gw = self.server
+        device: Device | None = gw.gw_devices.get(pdu.dev_id)
+        if device is None:
+            return  # unknown unit id: no reply (TCP default in §2.5; RTU: someone else's address)
+        client = self._client()
+        if gw.gw_allow is not None and client.rsplit(":", 1)[0] not in gw.gw_allow:
+            device.report({"kind": "link", "transport": gw.gw_name, "client": client,
+                           "event": "client refused", "reason": "client"})
+            if self.transport and gw.gw_name == "modbus-tcp":
+                self.transport.close()
+            return
+        link = device.link
+        if link.mode == "silent":
+            return
+        if link.mode == "drop":
+            if self.transport and gw.gw_name == "modbus-tcp":
+                self.transport.abort()
+            return
+        if link.mode == "late":
+            await asyncio.sleep(link.delay_s)
+            self.last_pdu = pdu
+        refusal = device.check_function(pdu.function_code)
+        if refusal is None and isinstance(pdu, ReadDeviceInformationRequest):
+            self._send(_identification(device, pdu), pdu)
+            return
+        self._corrupt = link.mode == "bad_crc" and gw.gw_name == "modbus-rtu"
+        try:
+            if refusal is not None:
+                device.report({"kind": "link", "transport": gw.gw_name, "client": client,
+                               "event": f"function {pdu.function_code} refused", "reason": "function"})
+                self._send(ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION), pdu)
+                return
+            token = _REQUEST.set((device, pdu, client))
+            try:
+                await super().handle_request()
+            finally:
+                _REQUEST.reset(token)
+        finally:
+            self._corrupt = False
+
+    def _send(self, response: Any, pdu: Any) -> None:
+        response.transaction_id = pdu.transaction_id
+        response.dev_id = pdu.dev_id
+        self.server_send(response, self.last_addr)
+
+    def send(self, data: bytes, addr: tuple | None = None) -> None:
+        if self._corrupt and data:
+            data = data[:-1] + bytes([data[-1] ^ 0xFF])  # last CRC byte flipped
+        super().send(data, addr)
+
+
+def _identification(device: Device, pdu: Any) -> Any:
+    ident = device.map.identity
+    objects = {0: ident.vendor, 1: str(ident.product_code), 2: ident.firmware,
+               3: "https://github.com/ (CoSES house twin)", 4: ident.product,
+               5: device.map.model, 6: device.id}
+    code = pdu.read_code
+    if code == 4:
+        if pdu.object_id not in objects:
+            return ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_ADDRESS)
+        info = {pdu.object_id: objects[pdu.object_id]}
+    else:
+        info = {k: v for k, v in objects.items() if k < (3 if code == 1 else 7)}
+    return ReadDeviceInformationResponse(read_code=code, information=info, dev_id=pdu.dev_id,
+                                         transaction_id=pdu.transaction_id)
+
+
+class ModbusServer:
+    """A pymodbus server for several devices, run in its own thread.
+
+    kind "tcp": `address` = (host, port), port 0 = ephemeral (see `.port` after start).
+    kind "rtu": `address` = serial port path; `serial` = dict(baudrate, parity, stopbits, bytesize).
+    `allow` = client IPs allowed on TCP (None = anyone).
+    """
+
+    def __init__(self, devices: Iterable[Device], kind: str, address: Any, *, name: str,
+                 allow: Iterable[str] | None = None, serial: dict | None = None) -> None:
+        self.devices = {d.unit_id: d for d in devices}
+        if len(self.devices) == 0:
+            raise TransportError(f"{name}: no devices to serve; pass at least one Device")
+        self.kind, self.address, self.name = kind, address, name
+        self.allow = set(allow) if allow is not None else None
+        self.serial = serial or {}
+        self.port: int | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._server: Any = None
+        self._thread: threading.Thread | None = None
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name=f"{self.name}-server", daemon=True)
+        self._thread.start()
+        if not self._ready.wait(10):
+            raise TransportError(f"{self.name} {self.address}: server did not start within 10 s")
+        if self._error:
+            raise TransportError(f"{self.name} {self.address}: cannot serve ({self._error}); "
+                                 "check the address/port is free and the serial device exists")
+
+    def stop(self) -> None:
+        loop, server = self._loop, self._server
+        if loop is None or not loop.is_running():
+            return
+        if server is not None:
+            try:
+                asyncio.run_coroutine_threadsafe(server.shutdown(), loop).result(5)
+            except Exception:  # shutting down anyway; a half-closed socket must not block stop()
+                log.exception("%s: shutdown", self.name)
+        loop.call_soon_threadsafe(loop.stop)
+        if self._thread:
+            self._thread.join(5)
+
+    def _run(self) -> None:
+        loop = asyncio.new_event_loop()
+        self._loop = loop
+        try:
+            loop.run_until_complete(self._open())
+        except BaseException as exc:  # reported to start() in the caller's thread
+            self._error = exc
+            self._ready.set()
+            loop.close()
+            return
+        self._ready.set()
+        try:
+            loop.run_forever()
+        finally:
+            loop.close()
+
+    async def _open(self) -> None:
+        sims = [SimDevice(id=d.unit_id, simdata=tuple(_simdata(d, t) for t in TABLES_ORDER),
+                          action=_action(d, self.name)) for d in self.devices.values()]
+        if self.kind == "tcp":
+            server = _TcpServer(sims, address=tuple(self.address), framer=FramerType.SOCKET)
+        else:
+            server = _SerialServer(sims, port=self.address, framer=FramerType.RTU,
+                                   reconnect_delay=0.5, **self.serial)
+        server.gw_devices, server.gw_allow, server.gw_name = self.devices, self.allow, self.name
+        server.gw_port_name = self.address
+        self._server = server
+        await server.serve_forever(background=True)
+        if self.kind == "tcp":
+            self.port = server.transport.sockets[0].getsockname()[1]
+
+
+#: pymodbus's non-shared block tuple order: coils, discrete inputs, holding, input registers.
+TABLES_ORDER = ("coil", "discrete", "holding", "input")
+assert set(TABLES_ORDER) == set(TABLES)
+
+
+class _TcpServer(ModbusTcpServer):
+    def callback_new_connection(self) -> _Handler:
+        return _Handler(self, self.trace_packet, self.trace_pdu, self.trace_connect)
+
+
+class _SerialServer(ModbusSerialServer):
+    def callback_new_connection(self) -> _Handler:
+        return _Handler(self, self.trace_packet, self.trace_pdu, self.trace_connect)

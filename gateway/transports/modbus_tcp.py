@@ -1,0 +1,35 @@
+"""ModbusTcpTransport: all devices of a house on one Modbus TCP server, one unit id each."""
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from gateway.device.device import Device
+from gateway.transports.base import Transport
+from gateway.transports.modbus_server import ModbusServer
+
+
+class ModbusTcpTransport(Transport):
+    """Modbus TCP on host:port (default 127.0.0.1, so nothing is exposed by accident).
+
+    port 0 picks a free port; read `.port` after start(). `allow` limits clients to these IPs
+    (others are disconnected and the attempt is reported as an event). Unknown unit ids get no
+    reply. Link faults per device: silent, late, drop (connection closed); bad_crc does not apply
+    to TCP (no CRC) and is ignored.
+    """
+
+    name = "modbus-tcp"
+
+    def __init__(self, devices: Iterable[Device], host: str = "127.0.0.1", port: int = 5020,
+                 allow: Iterable[str] | None = None) -> None:
+        self._server = ModbusServer(devices, "tcp", (host, port), name=self.name, allow=allow)
+        self.host = host
+
+    @property
+    def port(self) -> int | None:
+        return self._server.port
+
+    def start(self) -> None:
+        self._server.start()
+
+    def stop(self) -> None:
+        self._server.stop()

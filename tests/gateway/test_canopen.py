@@ -1,0 +1,325 @@
+"""CANopen nodes of the gateway, driven by a canopen RemoteNode master on a python-can bus.
+
+Real parts throughout: house1 with an external controller, the CHP Device from its map, the node
+on a virtual bus (a unique channel per test) and, once, on the socketcand hub.
+"""
+from __future__ import annotations
+
+import configparser
+import statistics
+import struct
+import time
+from collections.abc import Callable
+
+import canopen
+import pytest
+from canopen.objectdictionary import ODVariable, import_od
+from canopen.sdo import SdoAbortedError, SdoCommunicationError
+
+from gateway.device.device import Device
+from gateway.device.plant_port import PlantPort
+from gateway.maps.model import load_map
+from gateway.transports.can_bus import open_bus
+from gateway.transports.can_hub import CanHub
+from gateway.transports.canopen_node import CanopenTransport, build_object_dictionary, export_eds
+from plant.house import load_house
+
+CHP, BOILER = "devices/chp_neotower2.toml", "devices/boiler_wolf_cgb.toml"
+NODE = 0x11
+TPDO1, TPDO3, RPDO1 = 0x180 + NODE, 0x380 + NODE, 0x200 + NODE
+
+
+def wait_until(predicate: Callable[[], object], timeout: float = 2.0) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if predicate():
+            return True
+        time.sleep(0.002)
+    return bool(predicate())
+
+
+class Rig:
+    """A served CHP node plus a master on the same bus, recording what the master sees."""
+
+    def __init__(self, bus: str, maps: tuple[str, ...] = (CHP,), master_od=None) -> None:
+        self.port = PlantPort(load_house("house1", controller="external"))
+        self.devices = [Device(load_map(m), self.port) for m in maps]
+        self.device = self.devices[0]
+        self.events: list[dict] = []
+        self.device_events: list[dict] = []
+        for device in self.devices:
+            device.subscribe(self.device_events.append)
+        self.frames: dict[int, list[tuple[float, bytes]]] = {}
+        self.master = canopen.Network(open_bus(bus))
+        self.master.NOTIFIER_CYCLE = 0.1
+        self.master.connect()
+        self.node = self.master.add_node(NODE, master_od or build_object_dictionary(self.device.map))
+        self.node.sdo.RESPONSE_TIMEOUT = 0.2
+        for cob in (TPDO1, 0x280 + NODE, TPDO3, 0x700 + NODE, 0x80 + NODE):
+            self.master.subscribe(cob, self._record)
+        self.transport = CanopenTransport(self.devices, bus, on_event=self.events.append)
+        self.transport.start()
+
+    def _record(self, can_id: int, data: bytes, timestamp: float) -> None:
+        self.frames.setdefault(can_id, []).append((time.monotonic(), bytes(data)))
+
+    def count(self, can_id: int) -> int:
+        return len(self.frames.get(can_id, []))
+
+    def heartbeats(self) -> list[int]:
+        return [d[0] for _, d in self.frames.get(0x700 + NODE, [])]
+
+    def emcy_codes(self) -> list[int]:
+        return [struct.unpack_from("<H", d)[0] for _, d in self.frames.get(0x80 + NODE, [])]
+
+    def close(self) -> None:
+        self.transport.stop()
+        self.master.disconnect()
+
+
+@pytest.fixture
+def rig(request):
+    serving = Rig(f"virtual:test_canopen_{request.node.name}")
+    yield serving
+    serving.close()
+
+
+def aborted(action: Callable[[], object]) -> int:
+    with pytest.raises(SdoAbortedError) as info:
+        action()
+    return info.value.code
+
+
+def test_boot_heartbeat_and_nmt_states_are_honoured(rig):
+    assert wait_until(lambda: rig.heartbeats()[:1] == [0])          # boot-up message
+    rig.node.sdo[0x1017].raw = 20                                      # heartbeat every 20 ms
+    assert wait_until(lambda: rig.heartbeats()[-1:] == [127] and len(rig.heartbeats()) > 3)
+    rig.node.nmt.state = "OPERATIONAL"
+    assert wait_until(lambda: rig.heartbeats()[-1] == 5)
+    rig.node.nmt.state = "STOPPED"
+    assert wait_until(lambda: rig.heartbeats()[-1] == 4)
+    with pytest.raises(SdoCommunicationError):                         # no SDO in STOPPED
+        rig.node.sdo[0x1000].raw
+    before = len(rig.heartbeats())
+    rig.node.nmt.send_command(0x82)                                    # reset communication
+    assert wait_until(lambda: 0 in rig.heartbeats()[before:])
+    assert rig.node.sdo[0x1017].raw == 1000                            # defaults restored
+    states = [e["state"] for e in rig.events if e["kind"] == "nmt"]
+    assert states == ["PRE-OPERATIONAL", "OPERATIONAL", "STOPPED", "PRE-OPERATIONAL"]
+
+
+def test_sdo_reads_give_live_values_and_identity(rig):
+    assert rig.node.sdo[0x1000].raw == 0
+    assert rig.node.sdo[0x1008].raw == "neoTower 2.0"
+    assert rig.node.sdo[0x1018][2].raw == 2001
+    assert rig.node.sdo[0x2000][3].raw == "NT2-0000001"               # segmented upload
+    supply, p_el = rig.node.sdo["measurements"]["t_supply"], rig.node.sdo["measurements"]["p_el"]
+    assert supply.raw == rig.device.read_point("t_supply") and p_el.raw == 0
+    rig.port.set("chp.on", 1)
+    for _ in range(90):
+        rig.port.step(10.0)
+    assert p_el.raw == rig.device.read_point("p_el") > 0                 # 0.1 kW steps
+    assert supply.raw == rig.device.read_point("t_supply")
+    times = []
+    for _ in range(50):
+        start = time.perf_counter()
+        supply.raw
+        times.append(time.perf_counter() - start)
+    print(f"SDO upload median {statistics.median(times) * 1e3:.3f} ms")
+
+
+def test_sdo_writes_go_through_the_device(rig):
+    rig.node.sdo["commands"]["run_request"].raw = 1
+    rig.node.sdo["commands"]["modulation_set"].raw = 800
+    assert rig.port.get("chp.on") == 1 and rig.port.get("chp.y_set") == pytest.approx(0.8)
+    assert rig.node.sdo["commands"]["modulation_set"].raw == 800
+    rig.node.sdo["commands"]["modulation_set"].raw = 100             # the map clamps to 55 %
+    assert rig.node.sdo["commands"]["modulation_set"].raw == 550
+    assert rig.device.watchdog.last_refresh is not None
+    writes = [e for e in rig.device_events if e["kind"] == "write"]
+    assert {(e["transport"], e["client"], e["accepted"]) for e in writes} == \
+        {("canopen", "canopen-sdo", True)}
+
+
+def test_bad_sdo_accesses_get_the_abort_codes_of_the_refusal_table(rig):
+    sdo = rig.node.sdo
+    assert aborted(lambda: sdo.upload(0x3000, 0)) == 0x06020000
+    assert aborted(lambda: sdo.upload(0x2100, 0x30)) == 0x06090011
+    assert aborted(lambda: sdo.download(0x2100, 2, b"\x00\x00")) == 0x06010002
+    assert aborted(lambda: sdo.download(0x1000, 0, b"\0\0\0\0")) == 0x06010002
+    assert aborted(lambda: sdo.upload(0x2F00, 1)) == 0x06010001       # write-only heartbeat
+    assert aborted(lambda: sdo.download(0x2200, 1, b"\x02\x00")) == 0x06090031   # run_request 2
+    assert aborted(lambda: sdo.download(0x2F00, 2, b"\x05\x00")) == 0x06090032   # timeout 5 s
+    assert aborted(lambda: sdo.download(0x1003, 0, b"\x01")) == 0x06090030       # only 0 clears
+    assert aborted(lambda: sdo.download(0x2200, 1, b"\x01\x00\x00\x00")) == 0x06070010
+    assert aborted(lambda: sdo.download(0x1A02, 1, struct.pack("<L", 0x20000308))) == 0x06040041
+    rig.device.inject_trip()
+    assert aborted(lambda: sdo.download(0x2200, 1, b"\x01\x00")) == 0x08000022  # fault lockout
+    sdo.download(0x2F00, 1, b"\x07\x00")                                         # still served
+    refused = [(e["point"], e["reason"]) for e in rig.device_events
+               if e["kind"] == "write" and not e["accepted"]]
+    assert refused == [("run_request", "too_high"), ("watchdog_timeout", "too_low"),
+                       ("run_request", "state")]
+
+
+def test_pdos_flow_only_in_operational(rig):
+    rig.node.tpdo.read()
+    rig.node.rpdo.read()
+    rig.node.tpdo[1].event_timer = 20
+    rig.node.tpdo[1].save()
+    rig.node.rpdo[1]["commands.run_request"].raw = 1
+    rig.node.rpdo[1]["commands.modulation_set"].raw = 700
+    rig.node.rpdo[1].transmit()                                        # PRE-OPERATIONAL: ignored
+    time.sleep(0.1)
+    assert rig.count(TPDO1) == 0 and rig.port.get("chp.on") == 0
+
+    rig.node.nmt.state = "OPERATIONAL"
+    assert wait_until(lambda: rig.count(TPDO1) >= 6)
+    stamps = [t for t, _ in rig.frames[TPDO1]]
+    period = statistics.median(b - a for a, b in zip(stamps, stamps[1:]))
+    assert 0.012 < period < 0.035, period                              # event timer 20 ms
+    p_el, t_sup, t_ret, status = struct.unpack("<hhhH", rig.frames[TPDO1][-1][1])
+    assert t_sup == rig.device.read_point("t_supply") and p_el == rig.device.read_point("p_el")
+
+    rig.node.rpdo[1].transmit()
+    assert wait_until(lambda: rig.port.get("chp.on") == 1)
+    assert rig.port.get("chp.y_set") == pytest.approx(0.7)
+    assert rig.device.watchdog.last_refresh is not None                # RPDO refreshed it
+
+    rig.node.nmt.state = "STOPPED"
+    time.sleep(0.03)
+    frozen = rig.count(TPDO1)
+    time.sleep(0.1)
+    assert rig.count(TPDO1) == frozen
+
+
+def test_pdo_round_trip_on_sync_and_remote_remapping(rig):
+    tpdo = rig.node.tpdo[3]
+    tpdo.read()
+    tpdo.clear()
+    tpdo.add_variable("measurements", "t_buffer_top")
+    tpdo.add_variable("measurements", "flow")
+    tpdo.add_variable("counters", "starts")
+    tpdo.cob_id, tpdo.enabled, tpdo.trans_type = TPDO3, True, 1         # every SYNC
+    tpdo.save()
+    rig.node.nmt.state = "OPERATIONAL"
+    times = []
+    for _ in range(30):
+        seen = rig.count(TPDO3)
+        start = time.perf_counter()
+        rig.master.sync.transmit()
+        assert wait_until(lambda: rig.count(TPDO3) > seen, 1.0)
+        times.append(time.perf_counter() - start)
+    print(f"PDO round trip (SYNC -> TPDO) median {statistics.median(times) * 1e3:.3f} ms")
+    top, flow, starts = struct.unpack("<hHL", rig.frames[TPDO3][-1][1])
+    assert top == rig.device.read_point("t_buffer_top")
+    assert starts == rig.device.read_point("starts")
+
+    with pytest.raises(SdoAbortedError) as info:                      # 9 x 16 bit > 8 bytes
+        for i in range(1, 9):
+            rig.node.sdo.download(0x1A03, i, struct.pack("<L", 0x21000110))
+        rig.node.sdo.download(0x1A03, 0, b"\x08")
+        rig.node.sdo.download(0x1A03, 1, struct.pack("<L", 0x23000120))
+        rig.node.sdo.download(0x1A03, 0, b"\x08")
+    assert info.value.code == 0x06040042
+
+
+def test_can_faults_silence_the_node_and_are_reported(rig):
+    rig.node.sdo[0x1017].raw = 20
+    rig.transport.inject("error_passive", NODE)
+    assert wait_until(lambda: 0x8120 in rig.emcy_codes())
+    assert rig.node.sdo[0x1001].raw & 0x10                            # communication error bit
+    rig.transport.inject("bus_off", NODE)
+    time.sleep(0.05)
+    silent_from = len(rig.heartbeats())
+    time.sleep(0.1)
+    assert len(rig.heartbeats()) == silent_from
+    with pytest.raises(SdoCommunicationError):
+        rig.node.sdo[0x1000].raw
+    rig.transport.inject("recover", NODE)
+    assert wait_until(lambda: 0x8140 in rig.emcy_codes())
+    assert wait_until(lambda: len(rig.heartbeats()) > silent_from + 2)
+    assert rig.node.sdo[0x1001].raw & 0x10 == 0
+    assert rig.node.sdo[0x1003][0].raw == 2 and rig.node.sdo[0x1003][1].raw == 0x8140
+    rig.transport.inject("error_frame")
+    kinds = [e["kind"] for e in rig.events if e["kind"] not in ("nmt", "emcy")]
+    assert kinds == ["error_passive", "bus_off", "recover", "error_frame"]
+    with pytest.raises(Exception, match="unknown fault"):
+        rig.transport.inject("short_circuit")
+
+
+def test_eds_export_loads_back_with_the_same_objects(tmp_path):
+    dmap = load_map(CHP)
+    od = build_object_dictionary(dmap)
+    path = tmp_path / "chp_neotower2.eds"
+    export_eds(dmap, str(path))
+    back = import_od(str(path), NODE)
+
+    def flat(dictionary):
+        out = {}
+        for index in dictionary:
+            obj = dictionary[index]
+            for var in [obj] if isinstance(obj, ODVariable) else [obj[s] for s in obj]:
+                out[(var.index, var.subindex)] = (var.name, var.data_type, var.access_type,
+                                                  var.default, var.pdo_mappable, var.min, var.max)
+        return out
+
+    assert flat(back) == flat(od)
+    eds = configparser.RawConfigParser()
+    eds.optionxform = str
+    eds.read(path)
+    assert sorted(eds["DummyUsage"]) == [f"Dummy000{i}" for i in range(1, 8)]
+    assert "ref dachs:8019" in eds["2100sub2"]["Description"]
+    assert eds["2200sub1"]["LowLimit"] == "0" and eds["2200sub1"]["HighLimit"] == "1"
+
+
+def test_two_devices_share_one_bus(request):
+    serving = Rig(f"virtual:test_canopen_{request.node.name}", maps=(CHP, BOILER))
+    try:
+        boiler = serving.master.add_node(0x12, build_object_dictionary(serving.devices[1].map))
+        assert boiler.sdo[0x1018][2].raw == serving.devices[1].map.identity.product_code
+        assert serving.node.sdo[0x1018][2].raw == 2001
+    finally:
+        serving.close()
+
+
+def test_chp_node_and_master_over_the_can_hub(tmp_path):
+    hub_events: list[dict] = []
+    hub = CanHub(port=0, on_event=hub_events.append).start()
+    eds = tmp_path / "chp.eds"
+    export_eds(load_map(CHP), str(eds))
+    serving = Rig(hub.spec, master_od=str(eds))        # the master works from the exported EDS
+    try:
+        assert hub.wait_for_peers(2)
+        times = []
+        for _ in range(30):
+            start = time.perf_counter()
+            serving.node.sdo["measurements"]["t_supply"].raw
+            times.append(time.perf_counter() - start)
+        print(f"SDO upload over socketcand hub median {statistics.median(times) * 1e3:.3f} ms")
+        assert statistics.median(times) < 0.02          # no Nagle/delayed-ACK tails
+        serving.node.tpdo.read()
+        serving.node.tpdo[1].event_timer = 20
+        serving.node.tpdo[1].save()
+        serving.node.nmt.state = "OPERATIONAL"
+        assert wait_until(lambda: serving.count(TPDO1) >= 3)
+        serving.node.rpdo.read()
+        serving.node.rpdo[1]["commands.run_request"].raw = 1
+        serving.node.rpdo[1].transmit()
+        assert wait_until(lambda: serving.port.get("chp.on") == 1)
+
+        gateway_peer = hub.peers()[1]                  # the master connected first
+        hub.inject("bus_off", gateway_peer)
+        assert wait_until(lambda: any(e["kind"] == "bus_off" for e in serving.events))
+        time.sleep(0.05)
+        quiet = serving.count(TPDO1)
+        time.sleep(0.1)
+        assert serving.count(TPDO1) == quiet
+        hub.inject("recover", gateway_peer)
+        assert wait_until(lambda: 0x8140 in serving.emcy_codes())
+        assert wait_until(lambda: serving.count(TPDO1) > quiet + 2)
+        assert [e["kind"] for e in hub_events if e["kind"] in ("bus_off", "recover")] == \
+            ["bus_off", "recover"]
+    finally:
+        serving.close()
+        hub.stop()
