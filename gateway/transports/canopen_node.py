@@ -31,7 +31,7 @@ from gateway.maps import codec
 from gateway.maps.model import DeviceMap, Point
 from gateway.transports.base import Transport
 from gateway.transports.can_bus import FAULT_KINDS, error_message, fault_kind, open_bus, parse_bus_spec
-from plant.errors import TransportError
+from plant.errors import DeviceMapError, TransportError
 
 log = logging.getLogger(__name__)
 CO_TYPE = {"bool": dt.BOOLEAN, "uint16": dt.UNSIGNED16, "int16": dt.INTEGER16, "bits16": dt.UNSIGNED16,
@@ -124,6 +124,10 @@ def build_object_dictionary(dmap: DeviceMap) -> ObjectDictionary:
         for kind, comm, mapping, base in (("R", 0x1400, 0x1600, 0x200), ("T", 0x1800, 0x1A00, 0x180)):
             mapped = [p for p in dmap.points if p.pdo == f"{kind}{n + 1}" and p.co_index is not None]
             entries = [(p.co_index << 16) | ((p.co_sub or 0) << 8) | _bits(p) for p in mapped]
+            if sum(_bits(p) for p in mapped) > 64:
+                raise DeviceMapError(f"{dmap.path} [point {mapped[-1].name}] pdo = '{kind}{n + 1}': "
+                                     f"{sum(_bits(p) for p in mapped)} bits mapped; one CAN frame "
+                                     "holds 64; move points to another PDO")
             cob_id = base + 0x100 * n + node_id | (0 if entries else PDO_INVALID)
             # The RPDO event timer is the deadline monitor; UNSIGNED16 ms cannot hold a longer watchdog.
             event = DEFAULT_TPDO_EVENT_MS if kind == "T" else (deadline_ms if deadline_ms <= 0xFFFF else 0)
@@ -256,6 +260,8 @@ class DeviceNode(canopen.LocalNode):
         if index in range(0x1600, 0x1604) or index in range(0x1A00, 0x1A04):
             self._check_mapping(index, subindex, value)
         super().set_data(index, subindex, data)
+        if index == 0x1017:
+            self.hb_due = 0.0   # a new producer time restarts the heartbeat timer now
         if 0x1400 <= index < 0x1C00:
             self.load_pdos()    # canopen does not re-read a remapped PDO itself
         self.transport.wake()

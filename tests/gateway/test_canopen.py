@@ -19,11 +19,14 @@ from canopen.sdo import SdoAbortedError, SdoCommunicationError
 
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
-from gateway.maps.model import load_map
+from gateway.device.refusal import REASONS
+from gateway.maps import codec
+from gateway.maps.model import DEVICES_DIR, load_map
 from gateway.transports.can_bus import open_bus
 from gateway.transports.can_hub import CanHub
 from gateway.transports.canopen_node import CanopenTransport, build_object_dictionary, export_eds
 from plant.house import load_house
+from tests.gateway.contract import TIMEOUT, DeviceContract, build_gateway
 
 CHP, BOILER = "devices/chp_neotower2.toml", "devices/boiler_wolf_cgb.toml"
 NODE = 0x11
@@ -194,6 +197,13 @@ def test_pdos_flow_only_in_operational(rig):
     assert rig.port.get("chp.y_set") == pytest.approx(0.7)
     assert rig.device.watchdog.last_refresh is not None                # RPDO refreshed it
 
+    rig.master.send_message(RPDO1, b"\x01")                           # too short for its mapping
+    assert wait_until(lambda: 0x8210 in rig.emcy_codes())
+    rig.node.sdo[0x1400][5].raw = 50                                   # RPDO deadline 50 ms
+    rig.node.rpdo[1].transmit()
+    assert wait_until(lambda: 0x8250 in rig.emcy_codes(), 1.0)
+    assert any(e["kind"] == "rpdo_timeout" and e["cob_id"] == RPDO1 for e in rig.events)
+
     rig.node.nmt.state = "STOPPED"
     time.sleep(0.03)
     frozen = rig.count(TPDO1)
@@ -252,29 +262,38 @@ def test_can_faults_silence_the_node_and_are_reported(rig):
         rig.transport.inject("short_circuit")
 
 
-def test_eds_export_loads_back_with_the_same_objects(tmp_path):
-    dmap = load_map(CHP)
-    od = build_object_dictionary(dmap)
-    path = tmp_path / "chp_neotower2.eds"
+def flat(dictionary) -> dict:
+    out = {}
+    for index in dictionary:
+        obj = dictionary[index]
+        for var in [obj] if isinstance(obj, ODVariable) else [obj[s] for s in obj]:
+            out[(var.index, var.subindex)] = (var.name, var.data_type, var.access_type,
+                                              var.default, var.pdo_mappable, var.min, var.max)
+    return out
+
+
+@pytest.mark.parametrize("device_id", sorted(p.stem for p in DEVICES_DIR.glob("*.toml")))
+def test_every_map_exports_an_eds_that_loads_back_with_the_same_objects(device_id, tmp_path):
+    dmap = load_map(DEVICES_DIR / f"{device_id}.toml")
+    path = tmp_path / f"{device_id}.eds"
     export_eds(dmap, str(path))
-    back = import_od(str(path), NODE)
-
-    def flat(dictionary):
-        out = {}
-        for index in dictionary:
-            obj = dictionary[index]
-            for var in [obj] if isinstance(obj, ODVariable) else [obj[s] for s in obj]:
-                out[(var.index, var.subindex)] = (var.name, var.data_type, var.access_type,
-                                                  var.default, var.pdo_mappable, var.min, var.max)
-        return out
-
-    assert flat(back) == flat(od)
+    assert flat(import_od(str(path), dmap.canopen.node_id)) == flat(build_object_dictionary(dmap))
     eds = configparser.RawConfigParser()
     eds.optionxform = str
     eds.read(path)
     assert sorted(eds["DummyUsage"]) == [f"Dummy000{i}" for i in range(1, 8)]
-    assert "ref dachs:8019" in eds["2100sub2"]["Description"]
-    assert eds["2200sub1"]["LowLimit"] == "0" and eds["2200sub1"]["HighLimit"] == "1"
+
+
+def test_eds_describes_points_with_limits_and_provenance(tmp_path):
+    path = tmp_path / "chp_neotower2.eds"
+    export_eds(load_map(CHP), str(path))
+    eds = configparser.RawConfigParser()
+    eds.optionxform = str
+    eds.read(path)
+    assert eds["2100sub2"]["ParameterName"] == "t_supply"
+    assert "unit °C, scale 0.1, ref dachs:8019" in eds["2100sub2"]["Description"]
+    assert (eds["2200sub2"]["LowLimit"], eds["2200sub2"]["HighLimit"]) == ("550", "1000")
+    assert eds["2200sub1"]["PDOMapping"] == "0x1" and eds["2000sub3"]["PDOMapping"] == "0x0"
 
 
 def test_two_devices_share_one_bus(request):
@@ -327,3 +346,113 @@ def test_chp_node_and_master_over_the_can_hub(tmp_path):
     finally:
         serving.close()
         hub.stop()
+
+
+# ------------------------------------------------------------------------- device contract
+#: SDO abort code -> the Modbus exception of the same Refusal reason, so the contract's
+#: expectations (stated in Modbus codes) check that CANopen answers for the same reason.
+MODBUS_OF_ABORT = {}
+for _reason in REASONS.values():
+    MODBUS_OF_ABORT.setdefault(_reason.sdo_abort, _reason.modbus)
+
+
+class SdoBus:
+    """The contract's register-level bus, spoken through SDO to each device's node.
+
+    A register window becomes the points covering it (one SDO transfer per point); a write-only
+    point reads as zeros, as on Modbus; an abort becomes the Modbus code of the same reason.
+    """
+
+    def __init__(self, master: canopen.Network, devices: dict[str, Device]) -> None:
+        self.by_unit = {d.unit_id: d for d in devices.values()}
+        self.nodes = {d.unit_id: master.add_node(d.map.canopen.node_id, build_object_dictionary(d.map))
+                      for d in devices.values()}
+        for node in self.nodes.values():
+            node.sdo.RESPONSE_TIMEOUT = 0.2
+
+    def _points(self, unit: int, table: str, address: int, count: int):
+        dev, found, a = self.by_unit[unit], [], address
+        while a < address + count:
+            p = next((p for p in dev.map.points if p.table == table and p.co_index is not None
+                      and p.address <= a < p.address + p.words), None)
+            if p is None:
+                return None
+            found.append(p)
+            a = p.address + p.words
+        return found
+
+    def read(self, unit: int, table: str, address: int, count: int):
+        points = self._points(unit, table, address, count)
+        if points is None:
+            return 2
+        words: list[int] = []
+        for p in points:
+            try:
+                data = self.nodes[unit].sdo.upload(p.co_index, p.co_sub or 0)
+                var = self.nodes[unit].object_dictionary[p.co_index]
+                var = var if isinstance(var, ODVariable) else var[p.co_sub or 0]
+                words += codec.to_registers(p, var.decode_raw(data))
+            except SdoAbortedError as exc:
+                if exc.code != 0x06010001:
+                    return MODBUS_OF_ABORT.get(exc.code, exc.code)
+                words += [0] * p.words
+            except SdoCommunicationError:
+                return TIMEOUT
+        start = address - points[0].address
+        return words[start:start + count]
+
+    def write(self, unit: int, table: str, address: int, words: list[int]):
+        points = self._points(unit, table, address, len(words))
+        if points is None:
+            return 2
+        for p in points:
+            chunk = words[p.address - address:p.address - address + p.words]
+            od = self.nodes[unit].object_dictionary[p.co_index]
+            var = od if isinstance(od, ODVariable) else od[p.co_sub or 0]
+            try:
+                self.nodes[unit].sdo.download(p.co_index, p.co_sub or 0,
+                                              var.encode_raw(codec.from_registers(p, chunk)))
+            except SdoAbortedError as exc:
+                return MODBUS_OF_ABORT.get(exc.code, exc.code)
+            except SdoCommunicationError:
+                return TIMEOUT
+        return None
+
+
+@pytest.fixture(scope="module")
+def canopen_gateway():
+    gw = build_gateway()
+    bus = "virtual:test_canopen_contract"
+    master = canopen.Network(open_bus(bus))
+    master.NOTIFIER_CYCLE = 0.1
+    master.connect()
+    gw.transport = CanopenTransport(gw.devices.values(), bus)
+    gw.transport.start()
+    gw.bus = SdoBus(master, gw.devices)
+    yield gw
+    gw.transport.stop()
+    master.disconnect()
+
+
+class TestCanopenContract(DeviceContract):
+    transport_name = "canopen"
+
+    @pytest.fixture
+    def gateway(self, canopen_gateway):
+        return canopen_gateway
+
+    def test_refusals_answer_with_the_table_codes(self, gateway):
+        sdo, boiler = gateway.bus.nodes[gateway.unit("boiler_wolf_cgb")].sdo, gateway.devices["boiler_wolf_cgb"]
+        preset = boiler.map.point("glt_power_preset")
+        assert gateway.bus.write(boiler.unit_id, "holding", preset.address, [101]) == 3
+        assert aborted(lambda: sdo.download(preset.co_index, preset.co_sub, b"\x65\x00")) == 0x06090031
+        assert aborted(lambda: sdo.upload(0x5FFF, 0)) == 0x06020000
+        refused = [e for e in gateway.events if e["kind"] == "write" and not e["accepted"]]
+        assert {e["reason"] for e in refused} == {"too_high"}
+        assert all(e["transport"] == self.transport_name for e in refused)
+
+    def test_identification(self, gateway):
+        for dev in gateway.devices.values():
+            sdo = gateway.bus.nodes[dev.unit_id].sdo
+            assert sdo[0x1008].raw == (dev.map.identity.product or dev.map.model)
+            assert sdo[0x1018][2].raw == dev.map.identity.product_code

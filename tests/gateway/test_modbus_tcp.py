@@ -29,7 +29,7 @@ def tcp_gateway():
 class TestModbusTcp(DeviceContract):
     transport_name = "modbus-tcp"
 
-    @pytest.fixture(scope="class")
+    @pytest.fixture
     def gateway(self, tcp_gateway):
         return tcp_gateway
 
