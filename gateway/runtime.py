@@ -24,6 +24,7 @@ from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.maps.model import load_all
 from gateway.recording import Recorder
+from gateway.transports.registry import transport_class
 from plant.errors import ConfigError
 
 
@@ -68,23 +69,18 @@ class Runtime:
             self.recorder.event(ev)
 
     def add_modbus_tcp(self, host: str = "127.0.0.1", port: int = 5020, allow=None):
-        from gateway.transports.modbus_tcp import ModbusTcpTransport
-
-        tr = ModbusTcpTransport(self.devices.values(), host=host, port=port, allow=allow)
+        tr = transport_class("modbus-tcp")(self.devices.values(), host=host, port=port, allow=allow)
         self.transports.append(tr)
         return tr
 
     def add_modbus_rtu(self, serial_port: str, baudrate: int = 19200):
-        from gateway.transports.modbus_rtu import ModbusRtuTransport
-
-        tr = ModbusRtuTransport(self.devices.values(), serial_port, baudrate=baudrate)
+        tr = transport_class("modbus-rtu")(self.devices.values(), serial_port, baudrate=baudrate)
         self.transports.append(tr)
         return tr
 
     def add_canopen(self, bus: str = "virtual:house1"):
-        from gateway.transports.canopen_node import CanopenTransport
-
-        tr = CanopenTransport(self.devices.values(), bus, on_event=self._event, now=lambda: self.port.t)
+        tr = transport_class("canopen")(self.devices.values(), bus, on_event=self._event,
+                                        now=lambda: self.port.t)
         self.transports.append(tr)
         return tr
 

@@ -60,6 +60,8 @@ def _action(device: Device, transport: str):
                      values: list[int] | list[bool] | None) -> ExcCodes | None:
         try:
             _, pdu, client = _REQUEST.get((device, None, ""))
+            # counted by the controller audit (poll rates); the recorder does not log them
+            device.report({"kind": "request", "transport": transport, "client": client, "fc": fc})
             table = FC_TABLE.get(fc)
             if table is None:
                 return ExcCodes.ILLEGAL_FUNCTION

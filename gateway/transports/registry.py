@@ -10,6 +10,7 @@ from plant.errors import TransportError
 TRANSPORTS = {
     "modbus-tcp": "gateway.transports.modbus_tcp:ModbusTcpTransport",
     "modbus-rtu": "gateway.transports.modbus_rtu:ModbusRtuTransport",
+    "canopen": "gateway.transports.canopen_node:CanopenTransport",
 }
 
 

@@ -1,0 +1,1 @@
+"""FMU support: inspect FMUs, run a co-simulation FMU as a plant component, build the storage FMU."""
