@@ -84,11 +84,12 @@ class FmuComponent:
         self.input_names, self._in_vr, in_a, in_b = self._bind(inputs or {}, ("input", "parameter"), "input")
         self.output_names, self._out_vr, out_a, out_b = self._bind(
             outputs or {}, ("output", "local", "parameter", "calculatedParameter", "input"), "output")
-        self._in_a, self._in_b = np.array(in_a), np.array(in_b)
+        self._in_a, self._in_b = np.array(in_a, dtype=float), np.array(in_b, dtype=float)
         # outputs: ours = (fmu - b) / a
-        self._out_a, self._out_b = np.array(out_a), np.array(out_b)
-        self._u = np.array([self._start(self._vars[inputs[s][0]]) for s in self.input_names]) if inputs else np.zeros(0)
-        self._u = (self._u - self._in_b) / self._in_a if len(self._u) else self._u
+        self._out_a, self._out_b = np.array(out_a, dtype=float), np.array(out_b, dtype=float)
+        # until set, each input holds the FMU's start value (converted to our unit)
+        starts = np.array([self._start(self._vars[inputs[s][0]]) for s in self.input_names], dtype=float)
+        self._u = (starts - self._in_b) / self._in_a
         self._params = self._bind_parameters(parameters or {})
         self.time = float(start_time)
         self._dir = Path(tempfile.mkdtemp(prefix="coses-fmu-"))
@@ -140,7 +141,7 @@ class FmuComponent:
         return out
 
     def _md_vr(self, name):
-        return self._vr_by_name[name]
+        return self._vars[name].value_reference
 
     @staticmethod
     def _start(v):
@@ -169,7 +170,7 @@ class FmuComponent:
             self._write_inputs()
             self._fmu.exitInitializationMode()
             if self._fmi3:
-                self._fmu.enterStepMode() if hasattr(self._fmu, "enterStepMode") else None
+                self._fmu.enterStepMode()
         except FmuError:
             raise
         except Exception as exc:

@@ -17,6 +17,7 @@ class VariableInfo:
     unit: str  # "" when none is declared
     start: str | None
     description: str
+    value_reference: int
 
 
 @dataclass(frozen=True)
@@ -97,7 +98,7 @@ def inspect_fmu(path: str | Path) -> FmuInfo:
         VariableInfo(
             name=v.name, causality=v.causality or "local", variability=v.variability or "",
             type=v.type or "", unit=(v.unit or (v.declaredType.unit if v.declaredType else None) or ""),
-            start=v.start, description=v.description or "",
+            start=v.start, description=v.description or "", value_reference=v.valueReference,
         )
         for v in md.modelVariables
     )
