@@ -97,3 +97,31 @@ def test_serve_without_transport_is_a_clear_error():
     proc = subprocess.run([sys.executable, "-m", "gateway.cli.main", "serve", "house1"],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "no transport; give --modbus-tcp" in proc.stderr
+
+
+def test_runtime_serves_canopen_nodes_with_live_plant_values(tmp_path):
+    import uuid
+
+    import canopen
+
+    from gateway.transports.can_bus import open_bus
+    from gateway.transports.canopen_node import build_object_dictionary
+
+    bus = f"virtual:rt-{uuid.uuid4().hex[:8]}"
+    rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0))
+    rt.add_canopen(bus)
+    rt.start()
+    master = canopen.Network(open_bus(bus))
+    master.connect()
+    try:
+        chp = rt.devices["chp_neotower2"]
+        node = master.add_node(chp.map.canopen.node_id, build_object_dictionary(chp.map))
+        rt.clock.step(30)
+        t_ret = node.sdo["measurements"]["t_return"].raw * 0.1  # int16 x 0.1 degC, as on Modbus
+        assert t_ret == pytest.approx(rt.house.get("chp.T_ret"), abs=0.06)
+        node.sdo["commands"]["run_request"].raw = 1  # SDO write through the Device's validation
+        rt.clock.step(1)
+        assert rt.house.get("chp.on") == 1.0 and rt.house.is_remote("chp.on")
+    finally:
+        master.disconnect()
+        rt.stop()
