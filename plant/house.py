@@ -45,9 +45,13 @@ class Snapshot:
 
 
 def load_house(name_or_path: str | Path = "house1", start: str | None = None,
-               controller: str = "rule_based") -> "House":
-    """Assemble a house from its file; every problem is reported before the first step."""
-    return House(housefile.load(name_or_path), start=start, controller=controller)
+               controller: str = "rule_based", overrides: dict | None = None) -> "House":
+    """Assemble a house from its file; every problem is reported before the first step.
+
+    overrides: {"section.key": value}, e.g. {"storage.UA_loss": 25.0,
+    "connections.idle_flow_chp": 0.2}, validated like the file's own values.
+    """
+    return House(housefile.load(name_or_path, overrides), start=start, controller=controller)
 
 
 class House:
@@ -82,6 +86,8 @@ class House:
                           (solver.SYS_B_X_Y, "y")):
             sys[key] = boiler.STATES.index(name)
         sys[solver.SYS_TAU0] = loaders.start_offset(self.start)
+        sys[solver.SYS_IDLE_FLOW_CHP] = c.idle_flow_chp
+        sys[solver.SYS_PUMP_COUPLING_CHP] = c.pump_coupling_chp
         sys[solver.SYS_ST_TOP_LAYER] = storage.port_layer(c.storage_top_port, st)
         sys[solver.SYS_ST_BOTTOM_LAYER] = storage.port_layer(c.storage_bottom_port, st)
         self._p = tuple(pack(P[k]) for k in STATE_ORDER) + (pack(P["dhw"]), sys)

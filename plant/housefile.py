@@ -56,6 +56,8 @@ class Connections:
     storage_soc_Tmax: float = 80.0
     dhw_soc_T0: float = 15.0
     dhw_soc_Tmax: float = 80.0
+    idle_flow_chp: float = 0.0      # share of the heating primary flow forced through the CHP
+    pump_coupling_chp: float = 0.0  # share of the boiler flow forced through the CHP
 
 
 @dataclass(frozen=True)
@@ -101,7 +103,9 @@ def _line(text: str, section: str, key: str | None = None) -> int:
     return start or 0
 
 
-def load(name_or_path: str | Path) -> HouseSpec:
+def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
+    """Load and validate a house file; `overrides` {"section.key": value} replace file values
+    (validated like the file; used by fits and parameter studies)."""
     path = resolve(name_or_path)
     text = path.read_text()
     try:
@@ -109,6 +113,12 @@ def load(name_or_path: str | Path) -> HouseSpec:
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
     problems: list[str] = []
+    for dotted, value in (overrides or {}).items():
+        section, _, key = dotted.partition(".")
+        if not key:
+            problems.append(f"override {dotted!r}: expected 'section.key', e.g. 'storage.UA_loss'")
+            continue
+        doc.setdefault(section, {})[key] = value
     allowed = set(COMPONENTS) | {"house", "profiles", "connections"}
     for section in doc:
         if section not in allowed:

@@ -39,8 +39,8 @@ LEDGER_NAMES = ("fuel_chp", "fuel_boiler", "el_chp", "el_boiler", "heat_chp", "h
 (SYS_M_DHW_PUMP, SYS_SOC_T0, SYS_SOC_TMAX, SYS_DHW_SOC_T0, SYS_DHW_SOC_TMAX, SYS_DHW_COIL_UA,
  SYS_CHP_X_STARTS, SYS_CHP_X_RUNSEC, SYS_CHP_X_EEL, SYS_CHP_X_EHEAT, SYS_CHP_X_EFUEL,
  SYS_B_X_STARTS, SYS_B_X_RUNSEC, SYS_B_X_EHEAT, SYS_B_X_EFUEL, SYS_TAU0, SYS_ST_TOP_LAYER,
- SYS_ST_BOTTOM_LAYER, SYS_B_X_Y) = range(19)
-N_SYS = 19
+ SYS_ST_BOTTOM_LAYER, SYS_B_X_Y, SYS_IDLE_FLOW_CHP, SYS_PUMP_COUPLING_CHP) = range(21)
+N_SYS = 21
 
 # Signal indices as module constants S_<component>__<name> (numba freezes them at compile time;
 # a stale compiled cache after a catalogue change is caught by House's self-check).
@@ -108,7 +108,7 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         T_top = s[I_ST_S1 + int(p_c[rule_based.TOP_SENSOR]) - 1]
         T_bottom = s[I_ST_S1 + int(p_c[rule_based.BOTTOM_SENSOR]) - 1]
         T_dhw_top = s[I_DHW_S1 + int(p_c[rule_based.DHW_TOP_SENSOR]) - 1]
-        c_on, c_y, b_u, d_on = rule_based.step(x_c, p_c, T_top, T_bottom, T_dhw_top)
+        c_on, c_y, b_u, d_on = rule_based.step(h, x_c, p_c, T_top, T_bottom, T_dhw_top)
         if not remote[I_CHP_ON]:
             s[I_CHP_ON] = c_on
         if not remote[I_CHP_YSET]:
@@ -129,11 +129,12 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         m_dp = p_sys[SYS_M_DHW_PUMP] if s[I_DHW_ON] > 0.5 else 0.0
         m_mix, m_prim, T_mix_sup, y_valve = mixing_station.step(
             h, x_m, p_m, s[I_MIX_TSET], s[I_MIX_MSET], T_sh, x_r[0])
-        ext_chp, ext_b = prescribed.forced_generator_flows(m_prim + m_dp, 0.0, 0.0)
+        m_b, T_b, Pel_b, Pf_b, Ph_b, mode_b = boiler.step(
+            t, h, x_b, p_b, tabs[3], tabs[4], tabs[5], tabs[6], tabs[7], s[I_BOILER_U], 0.0, T_rh)
+        ext_chp = prescribed.forced_generator_flows(m_prim, m_b, p_sys[SYS_IDLE_FLOW_CHP],
+                                                    p_sys[SYS_PUMP_COUPLING_CHP])
         m_c, T_c, Pel_c, Pf_c, Ph_c, mode_c = chp.step(
             t, h, x_chp, p_chp, tabs[0], tabs[1], tabs[2], s[I_CHP_ON], s[I_CHP_YSET], ext_chp, T_rh)
-        m_b, T_b, Pel_b, Pf_b, Ph_b, mode_b = boiler.step(
-            t, h, x_b, p_b, tabs[3], tabs[4], tabs[5], tabs[6], tabs[7], s[I_BOILER_U], ext_b, T_rh)
 
         # 4. heating circuit and zone
         T_rad_ret, Q_rad = radiator.step(h, x_r, p_r, m_mix, T_mix_sup, x_z[0])

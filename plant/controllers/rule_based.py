@@ -18,7 +18,7 @@ from numba import njit
 
 from ..component import param
 
-STATES = ("chp_on", "boiler_on", "dhw_on")
+STATES = ("chp_on", "boiler_on", "dhw_on", "since_scan")
 
 
 @dataclass(frozen=True)
@@ -33,19 +33,26 @@ class Params:
     dhw_top_sensor: int = param(10, "1", "DHW storage sensor used as 'top'", 1, 10)
     chp_modulation: float = param(1.0, "1", "CHP modulation when on", 0.55, 1.0)
     boiler_demand: float = param(10.0, "V", "boiler 0-10 V demand when on", 2.1, 10.0)
+    period: float = param(1.0, "s", "scan period: the rules are evaluated this often (a PLC's cycle)", 0.0, 3600.0)
 
 
 (CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, TOP_SENSOR, BOTTOM_SENSOR,
- DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND) = range(10)
+ DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND, PERIOD) = range(11)
 
 
 def initial_state(params: Params) -> np.ndarray:
-    return np.zeros(3, dtype=np.float64)
+    x = np.zeros(4, dtype=np.float64)
+    x[3] = 1e300  # the first step scans
+    return x
 
 
 @njit(cache=True)
-def step(x, p, T_top, T_bottom, T_dhw_top):
-    """Update the hysteresis states; returns (chp_on, chp_y_set, boiler_U_set, dhw_pump_on)."""
+def step(dt, x, p, T_top, T_bottom, T_dhw_top):
+    """Scan when a period has passed; returns (chp_on, chp_y_set, boiler_U_set, dhw_pump_on)."""
+    x[3] += dt
+    if x[3] + 1e-9 < p[PERIOD]:
+        return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]
+    x[3] = 0.0
     if T_bottom > p[OFF_ABOVE]:
         x[0] = 0.0
         x[1] = 0.0

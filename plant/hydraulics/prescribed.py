@@ -7,7 +7,13 @@ the storage top and replaced at the bottom. No flow is ever forced through an id
 
 Interface (shared with a pressure-driven network that may replace this module):
     split(m_generators, m_demand) -> (m_charge, m_discharge)
-    forced_generator_flows(m_demand, on_chp, on_boiler) -> (m_ext_chp, m_ext_boiler)
+    forced_generator_flows(m_heating, m_boiler, idle_share, coupling_share) -> m_ext_chp
+
+The ideal switch forces no flow through a generator (both shares 0, as the original). Two
+lumped parameters let the same switch carry the effects a pressure-driven header produces
+(used by the fit to test hypotheses): a share of the heating circuit's primary flow short-
+circuiting through the CHP ("idle generator flow"), and a share of the boiler's flow pushed
+through the CHP ("pump coupling"). The generator takes max(own pump flow, forced flow).
 """
 from numba import njit
 
@@ -22,6 +28,6 @@ def split(m_generators, m_demand):
 
 
 @njit(cache=True)
-def forced_generator_flows(m_demand, m_chp_pump, m_boiler_pump):
-    """Flow pushed through each generator by the network: none in the ideal switch."""
-    return 0.0, 0.0
+def forced_generator_flows(m_heating, m_boiler, idle_share, coupling_share):
+    """Flow [kg/s] the network pushes through the CHP."""
+    return idle_share * m_heating + coupling_share * m_boiler
