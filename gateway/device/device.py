@@ -73,6 +73,9 @@ class Device:
         self._lock = threading.RLock()
         self._subscribers: list[Callable[[Event], None]] = [on_event] if on_event else []
         self._commanded: dict[str, float] = {}      # point -> device value while remote-driven
+        self._words: dict[str, list[int]] = {}      # point -> encoded words, see read_registers
+        self._cache_key: tuple[float, int] = (float("nan"), -1)
+        self._generation = 0
         self._index: dict[tuple[str, int], tuple[Point, int]] = {}
         for p in dmap.points:
             for w in range(p.words):
@@ -84,6 +87,8 @@ class Device:
 
     def report(self, event: Event) -> None:
         """Pass an event (from this device or its transports) to every subscriber."""
+        if event.get("kind") != "request":
+            self._generation += 1  # served values may have changed: drop the encoded words
         event = {"t": self.now(), "device": self.id, **event}
         for fn in list(self._subscribers):
             fn(event)
@@ -126,7 +131,13 @@ class Device:
             return Refusal("length", f"count {count}: must be 1…{MAX_COUNT[table]}")
         out: list[int] = []
         with self._lock:
-            cache: dict[str, list[int]] = {}
+            # Encoded words are reused until the plant steps or the device changes state (every
+            # state change is an event): polling clients then cost a dict lookup per point.
+            key = (self.port.t, self._generation)
+            if key != self._cache_key:
+                self._words.clear()
+                self._cache_key = key
+            cache = self._words
             for a in range(address, address + count):
                 hit = self._index.get((table, a))
                 if hit is None:
@@ -207,6 +218,7 @@ class Device:
             self.read_only = False
             if self.watchdog:
                 self.watchdog = Watchdog(self.map.watchdog)
+            self._generation += 1
 
     # ----------------------------------------------------------------- faults
     def inject_sensor_fault(self, point: str, kind: str = "open", delta: float = 0.0) -> None:
