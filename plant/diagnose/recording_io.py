@@ -1,0 +1,280 @@
+"""Read a lab recording for `twin diagnose`: CSV + columns.toml, or a gateway recording directory.
+
+CSV: a `time` column in seconds since the recording start plus user columns. The mapping file:
+
+    [recording]
+    start = "2021-01-10"            # date (or YYYY-MM-DDTHH:MM) of time = 0, local standard time
+    [columns]
+    "TS_CHP_out" = "chp.T_sup"      # user column -> catalogue signal
+    [units]
+    "TS_CHP_out" = "degC"           # degC | K | kg/s | l/min | l/h | m3/h | W | kW | 1 | % | V | J | kWh | h
+
+A gateway run directory (signals.csv, events.csv, meta.json) needs no mapping: its columns are
+catalogue names in catalogue units and meta.json holds the start.
+
+Bad input is repaired with a warning that says what was done, or rejected (ConfigError/DataError)
+with a message that says why: unsorted timestamps are sorted, duplicate timestamps keep the last
+row, gaps longer than 3 median intervals are held (commands) and excluded from scoring, NaN
+samples of measured signals are excluded, NaN commands are held; unknown columns are ignored;
+units that are unknown or whose values are implausible for the unit are rejected.
+"""
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from difflib import get_close_matches
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover
+    import tomli as tomllib
+
+from ..catalogue import CATALOGUE
+from ..errors import ConfigError, DataError
+
+# unit -> (catalogue unit, factor, offset): catalogue value = value * factor + offset
+UNITS = {
+    "degC": ("degC", 1.0, 0.0), "°C": ("degC", 1.0, 0.0), "C": ("degC", 1.0, 0.0),
+    "K": ("degC", 1.0, -273.15),
+    "kg/s": ("kg/s", 1.0, 0.0), "l/s": ("kg/s", 1.0, 0.0), "l/min": ("kg/s", 1.0 / 60.0, 0.0),
+    "l/h": ("kg/s", 1.0 / 3600.0, 0.0), "m3/h": ("kg/s", 1000.0 / 3600.0, 0.0),
+    "kg/h": ("kg/s", 1.0 / 3600.0, 0.0),
+    "W": ("W", 1.0, 0.0), "kW": ("W", 1000.0, 0.0),
+    "W/m2": ("W/m2", 1.0, 0.0),
+    "1": ("1", 1.0, 0.0), "%": ("1", 0.01, 0.0), "-": ("1", 1.0, 0.0),
+    "V": ("V", 1.0, 0.0),
+    "J": ("J", 1.0, 0.0), "kWh": ("J", 3.6e6, 0.0),
+    "h": ("h", 1.0, 0.0),
+}
+# plausible range of a converted value per catalogue unit (catches e.g. Kelvin labelled degC)
+PLAUSIBLE = {"degC": (-40.0, 130.0), "kg/s": (-5.0, 5.0), "W": (-2e5, 2e5), "V": (-1.0, 11.0)}
+
+
+@dataclass
+class Recording:
+    """Samples in catalogue units: time [s since start], data {signal: array} (NaN = missing)."""
+
+    source: str
+    start: str
+    time: np.ndarray
+    data: dict
+    warnings: list = field(default_factory=list)
+    valid: np.ndarray | None = None  # samples usable for scoring (False inside gaps)
+    columns: dict = field(default_factory=dict)  # signal -> user column name
+
+    def has(self, name: str) -> bool:
+        return name in self.data
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+
+def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    if not rows:
+        raise DataError(f"{path}: empty file")
+    header = [h.strip() for h in rows[0]]
+    body = []
+    bad = 0
+    for r in rows[1:]:
+        if not r or all(not c.strip() for c in r):
+            continue
+        if len(r) != len(header):
+            bad += 1
+            continue
+        vals = []
+        for c in r:
+            c = c.strip()
+            try:
+                vals.append(float(c) if c not in ("", "nan", "NaN", "NA") else np.nan)
+            except ValueError:
+                vals.append(np.nan)
+        body.append(vals)
+    data = np.array(body, dtype=float) if body else np.zeros((0, len(header)))
+    if bad:
+        data = data  # reported by the caller
+    return header, data, bad
+
+
+def read_mapping(path: str | Path) -> dict:
+    p = Path(path)
+    if not p.exists():
+        raise ConfigError(f"{p}: no such mapping file")
+    try:
+        doc = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
+    if "columns" not in doc or not isinstance(doc["columns"], dict):
+        raise ConfigError(f"{p}: needs a [columns] table: \"user column\" = \"signal.name\"")
+    return doc
+
+
+def load(path: str | Path, mapping: str | Path | None = None, start: str | None = None,
+         house_start: str = "2021-01-10") -> Recording:
+    """Read a CSV (+ mapping) or a gateway recording directory; repair or reject bad input."""
+    p = Path(path)
+    warnings: list[str] = []
+    if p.is_dir():
+        from gateway.recording.reader import read_recording
+
+        rec = read_recording(p)
+        header = ["time"] + rec.names
+        raw = np.column_stack([rec.time, rec.values]) if len(rec.time) else np.zeros((0, len(header)))
+        colmap = {n: n for n in rec.names if n in CATALOGUE}
+        units = {n: CATALOGUE.signal(n).unit for n in colmap}
+        for n in rec.names:
+            if n not in CATALOGUE:
+                warnings.append(f"column {n!r}: not a catalogue signal; ignored")
+        start = start or rec.meta.get("start")
+        bad = 0
+    else:
+        if not p.exists():
+            raise ConfigError(f"{p}: no such recording")
+        header, raw, bad = _read_csv(p)
+        if "time" not in header:
+            raise DataError(f"{p}: needs a 'time' column in seconds; columns are: {', '.join(header[:12])}")
+        if mapping is None:
+            # columns named like catalogue signals need no mapping (catalogue units assumed)
+            colmap = {h: h for h in header if h in CATALOGUE}
+            units = {h: CATALOGUE.signal(h).unit for h in colmap}
+            if not colmap:
+                raise ConfigError(f"{p}: no column is a catalogue signal name; pass --map columns.toml")
+            if any(h not in colmap and h != "time" for h in header):
+                warnings.append("columns not in the catalogue ignored: "
+                                + ", ".join(h for h in header if h not in colmap and h != "time"))
+        else:
+            doc = read_mapping(mapping)
+            colmap = {}
+            problems = []
+            for col, sig in doc["columns"].items():
+                if sig not in CATALOGUE:
+                    close = get_close_matches(str(sig), CATALOGUE.names, n=2)
+                    problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
+                                    + (f"; did you mean {', '.join(close)}?" if close else
+                                       "; list them with `twin signals house1`"))
+                    continue
+                if col not in header:
+                    close = get_close_matches(col, header, n=2)
+                    problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
+                                    + (f"; did you mean {', '.join(close)}?" if close else ""))
+                    continue
+                colmap[col] = sig
+            units = {}
+            for col, sig in colmap.items():
+                u = doc.get("units", {}).get(col)
+                cat_unit = CATALOGUE.signal(sig).unit
+                if u is None:
+                    units[col] = cat_unit
+                    continue
+                if u not in UNITS:
+                    problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
+                                    + ", ".join(sorted(UNITS)))
+                    continue
+                if UNITS[u][0] != cat_unit and not (cat_unit == "1" and u in ("%", "1", "-")):
+                    problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
+                                    f"(a {cat_unit} signal)")
+                    continue
+                units[col] = u
+            if problems:
+                raise ConfigError("\n".join(problems))
+            extra = [h for h in header if h != "time" and h not in colmap]
+            if extra:
+                warnings.append(f"{len(extra)} column(s) not in the mapping ignored: " + ", ".join(extra[:8])
+                                + (" ..." if len(extra) > 8 else ""))
+            start = start or doc.get("recording", {}).get("start")
+        if bad:
+            warnings.append(f"{bad} row(s) with the wrong number of fields dropped")
+    if raw.shape[0] < 3:
+        raise DataError(f"{p}: fewer than 3 samples")
+    if not start:
+        start = house_start
+        warnings.append(f"no start date in the recording or mapping ([recording] start); "
+                        f"assumed the house file's start {start}")
+    t = raw[:, header.index("time")]
+    keep = np.isfinite(t)
+    if not keep.all():
+        warnings.append(f"{int((~keep).sum())} row(s) without a valid time dropped")
+        raw, t = raw[keep], t[keep]
+    if np.any(np.diff(t) < 0):
+        order = np.argsort(t, kind="stable")
+        warnings.append(f"timestamps not sorted ({int(np.sum(np.diff(t) < 0))} backward step(s)); "
+                        "rows sorted by time")
+        raw, t = raw[order], t[order]
+    dup = np.concatenate([np.diff(t) == 0, [False]])
+    if dup.any():
+        warnings.append(f"{int(dup.sum())} duplicate timestamp(s); kept the last row of each")
+        raw, t = raw[~dup], t[~dup]
+    data = {}
+    for col, sig in colmap.items():
+        u = units[col]
+        _, f, off = UNITS.get(u, (u, 1.0, 0.0))
+        v = raw[:, header.index(col)] * f + off
+        cat_unit = CATALOGUE.signal(sig).unit
+        lo_hi = PLAUSIBLE.get(cat_unit)
+        if lo_hi is not None:
+            fin = v[np.isfinite(v)]
+            if fin.size:
+                med = float(np.median(fin))
+                if not lo_hi[0] <= med <= lo_hi[1]:
+                    hint = ""
+                    if cat_unit == "degC" and 230 < med < 400:
+                        hint = " (looks like Kelvin: declare the unit \"K\")"
+                    elif cat_unit == "kg/s" and med > 5:
+                        hint = " (looks like l/min or l/h: declare the unit)"
+                    elif cat_unit == "W" and abs(med) < 1e-3:
+                        hint = ""
+                    raise DataError(f"column {col!r} -> {sig}: median {med:g} {cat_unit} after unit "
+                                    f"conversion from {u!r} is implausible{hint}")
+        if sig in data:
+            warnings.append(f"{sig}: mapped from two columns; the later one ({col!r}) used")
+        data[sig] = v
+    dts = np.diff(t)
+    med = float(np.median(dts))
+    valid = np.ones(len(t), dtype=bool)
+    gaps = np.nonzero(dts > 3.0 * med)[0]
+    if gaps.size:
+        total = float(np.sum(dts[gaps]))
+        warnings.append(f"{gaps.size} gap(s) longer than 3 sample intervals ({total / 3600:.2f} h in all; "
+                        f"longest {dts[gaps].max() / 60:.1f} min): commands held through the gaps, "
+                        "the first hour after each gap excluded from scoring")
+        for g in gaps:
+            valid[(t > t[g]) & (t <= t[g + 1] + 3600.0)] = False
+    for sig, v in data.items():
+        nan = ~np.isfinite(v)
+        if nan.any():
+            causality = CATALOGUE.signal(sig).causality
+            if causality == "input":
+                idx = np.where(~nan, np.arange(len(v)), 0)
+                np.maximum.accumulate(idx, out=idx)
+                first = np.flatnonzero(~nan)
+                if first.size == 0:
+                    raise DataError(f"{sig}: every sample is missing")
+                v[:first[0]] = v[first[0]]
+                v[:] = v[idx] if first[0] == 0 else np.where(nan, v[np.maximum(idx, first[0])], v)
+                warnings.append(f"{sig}: {int(nan.sum())} missing command sample(s) held at the last value")
+            else:
+                warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
+    return Recording(str(p), str(start), t, data, warnings, valid,
+                     {sig: col for col, sig in colmap.items()})
+
+
+def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,
+              start: str | None = None, units: dict | None = None, columns: dict | None = None) -> None:
+    """Write a recording as CSV (+ columns.toml); columns {signal: user column} renames them."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    names = list(data)
+    cols = [(columns or {}).get(n, n) for n in names]
+    arr = np.column_stack([time] + [data[n] for n in names])
+    np.savetxt(path, arr, delimiter=",", header=",".join(["time"] + cols), comments="", fmt="%.6g")
+    if mapping_path:
+        lines = ["[recording]", f'start = "{start or "2021-01-10"}"', "", "[columns]"]
+        lines += [f'"{c}" = "{n}"' for c, n in zip(cols, names)]
+        lines += ["", "[units]"]
+        lines += [f'"{c}" = "{(units or {}).get(n, CATALOGUE.signal(n).unit)}"' for c, n in zip(cols, names)]
+        Path(mapping_path).write_text("\n".join(lines) + "\n")
