@@ -60,8 +60,6 @@ def _action(device: Device, transport: str):
                      values: list[int] | list[bool] | None) -> ExcCodes | None:
         try:
             _, pdu, client = _REQUEST.get((device, None, ""))
-            # counted by the controller audit (poll rates); the recorder does not log them
-            device.report({"kind": "request", "transport": transport, "client": client, "fc": fc})
             table = FC_TABLE.get(fc)
             if table is None:
                 return ExcCodes.ILLEGAL_FUNCTION
@@ -97,12 +95,15 @@ class _Handler(ServerRequestHandler):
     def __init__(self, owner: Any, *args: Any) -> None:
         super().__init__(owner, *args)
         self._corrupt = False
+        self._peer: str | None = None  # one connection, one client: resolved once
+        self._peer_known = False
 
     def _client(self) -> str:
-        peer = self.transport.get_extra_info("peername") if self.transport else None
-        if isinstance(peer, tuple):
-            return f"{peer[0]}:{peer[1]}"
-        return str(self.server.gw_port_name)
+        if self._peer is None or not self._peer_known:
+            peer = self.transport.get_extra_info("peername") if self.transport else None
+            self._peer_known = isinstance(peer, tuple)
+            self._peer = f"{peer[0]}:{peer[1]}" if self._peer_known else str(self.server.gw_port_name)
+        return self._peer
 
     async def handle_request(self) -> None:
         pdu = self.last_pdu
@@ -140,6 +141,9 @@ class _Handler(ServerRequestHandler):
                                "event": f"function {pdu.function_code} refused", "reason": "function"})
                 self._send(ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION), pdu)
                 return
+            # counted by the controller audit (poll rates); the recorder does not log them
+            device.report({"kind": "request", "transport": gw.gw_name, "client": client,
+                           "fc": pdu.function_code})
             token = _REQUEST.set((device, pdu, client))
             try:
                 await super().handle_request()
