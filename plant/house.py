@@ -85,17 +85,24 @@ class House:
                           (solver.SYS_B_X_EHEAT, "E_heat"), (solver.SYS_B_X_EFUEL, "E_fuel"),
                           (solver.SYS_B_X_Y, "y")):
             sys[key] = boiler.STATES.index(name)
-        sys[solver.SYS_TAU0] = loaders.start_offset(self.start)
+        if spec.typeday:  # a type-day block: time 0 = the block's first midnight
+            sys[solver.SYS_TAU0] = loaders.typeday_offset(spec.typeday)
+        else:
+            sys[solver.SYS_TAU0] = loaders.start_offset(self.start)
         sys[solver.SYS_IDLE_FLOW_CHP] = c.idle_flow_chp
         sys[solver.SYS_PUMP_COUPLING_CHP] = c.pump_coupling_chp
         sys[solver.SYS_ST_TOP_LAYER] = storage.port_layer(c.storage_top_port, st)
         sys[solver.SYS_ST_BOTTOM_LAYER] = storage.port_layer(c.storage_bottom_port, st)
         self._p = tuple(pack(P[k]) for k in STATE_ORDER) + (pack(P["dhw"]), sys)
         self._tabs = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in chp.tables() + boiler.tables())
-        w = loaders.weather()
-        pres = loaders.presence()
-        pel = loaders.electricity(spec.household_kwh_per_year)
-        draw = loaders.hot_water(spec.dhw_litres_per_day)
+        if spec.typeday:
+            td = loaders.typeday(spec.typeday, spec.household_kwh_per_year, spec.dhw_litres_per_day)
+            w, pres, pel, draw = td, td["presence"], td["P_el"], td["draw"]
+        else:
+            w = loaders.weather()
+            pres = loaders.presence()
+            pel = loaders.electricity(spec.household_kwh_per_year)
+            draw = loaders.hot_water(spec.dhw_litres_per_day)
         self._prof = ((w["T_air"].values, w["E_dir"].values, w["E_dif"].values, pres.values,
                        pel.values, draw.values),
                       (w["T_air"].step, pres.step, pel.step, draw.step))

@@ -68,6 +68,7 @@ class HouseSpec:
     start: str
     household_kwh_per_year: float
     dhw_litres_per_day: float
+    typeday: int  # 0: the 2021 year series; 1..11: a type-day block (profiles/loaders.py)
     params: dict  # section -> Params instance
     connections: Connections
 
@@ -167,6 +168,15 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
                 problems.append(f"{path}:{_line(text, 'connections', top)} [connections] {top} must be "
                                 f"above {bot}")
     prof = doc.get("profiles", {})
+    typeday = prof.get("typeday", 0)
+    if isinstance(typeday, bool) or not isinstance(typeday, int) or not 0 <= typeday <= 11:
+        problems.append(f"{path}:{_line(text, 'profiles', 'typeday')} [profiles] typeday = {typeday!r}: "
+                        "must be 0 (year 2021 series) or a type-day block 1 … 11")
+        typeday = 0
+    unknown = set(prof) - {"typeday", "household_kwh_per_year", "dhw_litres_per_day"}
+    for key in sorted(unknown):
+        problems.append(f"{path}:{_line(text, 'profiles', key)} [profiles] {key}: unknown; allowed: "
+                        "household_kwh_per_year, dhw_litres_per_day, typeday")
     kwh = prof.get("household_kwh_per_year", 6500.0)
     litres = prof.get("dhw_litres_per_day", 300.0)
     for key, v, hi in (("household_kwh_per_year", kwh, 1e6), ("dhw_litres_per_day", litres, 1e5)):
@@ -178,5 +188,5 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
     return HouseSpec(
         name=house["name"], path=path, description=house.get("description", ""),
         start=str(house.get("start", "2021-01-01")), household_kwh_per_year=float(kwh),
-        dhw_litres_per_day=float(litres), params=params, connections=connections,
+        dhw_litres_per_day=float(litres), typeday=typeday, params=params, connections=connections,
     )

@@ -119,3 +119,51 @@ def hot_water(daily_litres: float) -> Series:
     lph = _dhw_minutes()
     mean_daily = lph.sum() / 60.0 / 365.0
     return Series(lph * (daily_litres / mean_daily) / 3.6e6, 60.0, False)
+
+
+# --- type days ----------------------------------------------------------------------------
+# The SF1 type-day file holds 11 three-day weather blocks (15 min) and 39 days of presence,
+# electricity and hot water. Block k (1-based) covers file days 3k-3 ... 3k-1; its middle day is
+# the "type day". Their 2021 dates (found by matching the year file; the last block is a cold
+# spell not in 2021): the mapping to the 13 type-day codes upstream is unclear, so blocks are
+# addressed by number and date only.
+TYPEDAY_BLOCKS = {
+    1: "2021-01-24", 2: "2021-01-21", 3: "2021-12-14", 4: "2021-10-17", 5: "2021-10-06",
+    6: "2021-04-11", 7: "2021-08-03", 8: "2021-07-04", 9: "2021-08-10", 10: "2021-08-15",
+    11: "cold spell (daily means about -8 degC, not in 2021)",
+}
+
+
+@cache
+def _typeday_tables() -> dict[str, np.ndarray]:
+    return read_tables(HERE / "typedays" / "SF1_Typeday.txt")
+
+
+def typeday(block: int, household_kwh_per_year: float, dhw_litres_per_day: float) -> dict[str, Series]:
+    """Profiles of one type-day block, on an axis where 0 s = file start (block k starts at
+    (3k-3) days). Electricity and hot water are rescaled to the house's annual and daily totals."""
+    if block not in TYPEDAY_BLOCKS:
+        raise ConfigError(f"[profiles] typeday = {block}: no such block; allowed 1 … {len(TYPEDAY_BLOCKS)}")
+    t = _typeday_tables()
+    w = t["Weather"]
+    shift = 4  # UTC -> CET, as for the year file
+    out = {name: Series(np.roll(w[:-1, c].copy(), shift), 900.0, True)
+           for name, c in (("T_air", 1), ("E_dir", 3), ("E_dif", 4))}
+    pres = t["presence"]
+    grid = np.arange(0.0, pres[-1, 0] + 1.0, 3600.0)
+    out["presence"] = Series(np.interp(grid, pres[:, 0], pres[:, 1]), 3600.0, True)
+    pel = t["Pel"][:-1, 1]
+    scale = household_kwh_per_year / (pel.mean() * 8760.0 / 1000.0)
+    out["P_el"] = Series(pel * scale, 60.0, False)
+    dhw = t["V_DHW"]
+    minutes = np.zeros(int(dhw[-1, 0] // 60) + 1)
+    idx = (dhw[:, 0] // 60).astype(int)
+    minutes[idx] = dhw[:, 1]  # change points: a draw at minute k is written as 0 / value / 0
+    mean_daily = minutes.sum() / 60.0 / (len(minutes) / 1440.0)
+    out["draw"] = Series(minutes * (dhw_litres_per_day / mean_daily) / 3.6e6, 60.0, False)
+    return out
+
+
+def typeday_offset(block: int) -> float:
+    """Seconds from the type-day file start to the start of block `block` (midnight)."""
+    return (3 * block - 3) * 86400.0

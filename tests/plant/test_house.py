@@ -127,3 +127,18 @@ def test_missing_required_key_is_named(tmp_path):
     path.write_text(src.replace('topology = "two_generator_switch"\n', ""))
     with pytest.raises(ConfigError, match=r"\[house\] topology: missing"):
         load_house(path)
+
+
+def test_type_day_block_drives_the_house_with_its_own_weather(tmp_path):
+    src = (load_house.__globals__["housefile"].HOUSES / "house1.toml").read_text()
+    path = tmp_path / "td.toml"
+    path.write_text(src.replace("[profiles]\n", "[profiles]\ntypeday = 11\n"))
+    cold = load_house(path)  # block 11: the cold spell, daily means about -8 degC
+    cold.run(3 * 86400, dt=10.0, out_interval=3600)
+    names = cold.catalogue.names
+    t, rows = load_house(path).run(3 * 86400, dt=10.0, out_interval=3600)
+    assert rows[:, names.index("weather.T_air")].mean() < -5.0
+    assert cold.ledger()["closure"] < 1e-9
+    path.write_text(src.replace("[profiles]\n", "[profiles]\ntypeday = 12\n"))
+    with pytest.raises(ConfigError, match=r"typeday = 12: must be 0 .* 1 … 11"):
+        load_house(path)
