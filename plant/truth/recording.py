@@ -1,0 +1,323 @@
+"""Lab-like recordings of house 1 with known effects: the test data of `twin diagnose`.
+
+    meta = make_recording("concealed_idle_flow", out="rec/", days=7, start="2021-01-10", seed=1)
+    times, data, units = read_recording("rec/")        # user columns, as written
+
+A recording directory holds
+  * recording.csv (recording.csv.gz if larger than 2 MB): `time` in seconds since the start
+    (00:00 local standard time of `start`), then lab-tag columns (COLUMNS below);
+  * columns.toml: [recording] start, [columns] "user column" = "catalogue signal",
+    [units] "user column" = unit (degC, l/min, kW, V, 1);
+  * meta.json: case, seed, magnitude, the truth parameters, the measured effect sizes, the
+    noise model and the command that regenerates it.
+
+What is "measured" and how (the lab's instrumentation, as decided here):
+  * temperatures: + N(0, 0.07 K), quantised to 0.1 K; the outdoor temperature N(0, 0.1 K);
+  * flows (boiler, heating circuit, DHW charging, DHW tap) in l/min: x (1 + N(0, 1 %)), quantised
+    to 0.1 l/min; there is NO flow meter in the CHP branch;
+  * powers in kW: x (1 + N(0, 1 %)), quantised to 0.01 kW. CHP_P_heat is the CHP branch's
+    heat meter (true m cp (T_sup - T_ret) of the branch); its internal flow sensor is NOT logged,
+    so the flow through the CHP (and the idle flow) appears in no column. The idle flow shows
+    only indirectly: the idle CHP's outlet cools to the return temperature, the running CHP's
+    outlet stays below 80 degC (forced flow), storage and controller timing differ;
+  * commands and set-points (CHP on/modulation, boiler 0-10 V, DHW pump, mixer set-points) are
+    logged exactly (they are what the PLC wrote) - they and the weather file drive a replay;
+  * sampling: one row every `sample` s, each sample taken at an integer second jittered by up to
+    +-jitter s around the grid, and its timestamp logged with a further uniform +-0.5 s error.
+Cases (magnitude = the case's one knob; default in CASES):
+  nominal              the ideal twin itself (load_house) + noise: the null case
+  concealed_idle_flow  the truth on the pressure network; magnitude scales the conductance of
+                       the CHP branch (1 = calibrated: ~25 % of the heating primary flow passes
+                       the idle CHP)
+  storage_heat_loss    ideal switch, storage UA_loss = magnitude W/K (twin: 20 W/K)
+  sensor_lag           ideal switch, storage sensor 10 (the controller's 'top') lags with a
+                       first-order time constant of magnitude s
+  storage_mixing       ideal switch, storage inflows spread over magnitude litres below/above the
+                       port (twin: one 20 l layer)
+"""
+from __future__ import annotations
+
+import gzip
+import io
+import json
+import math
+import time as _time
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..water import RHO
+
+CASES = {
+    "nominal": ("the ideal twin (plant.house.load_house) with sensor noise only", None, ""),
+    "concealed_idle_flow": ("pressure-driven header: parasitic flow through the idle CHP and "
+                            "boiler suction through the running CHP", 1.0, "x CHP-branch conductance"),
+    "storage_heat_loss": ("storage heat loss larger than the twin's 20 W/K", 40.0, "W/K storage UA_loss"),
+    "sensor_lag": ("first-order lag on storage sensor 10 (read by the controller)", 120.0, "s time constant"),
+    "storage_mixing": ("strong inlet mixing in the heating storage", 160.0, "litres of inlet mixing"),
+}
+
+# user column, catalogue signal, unit, measurement kind (cmd | T | Tair | flow | power)
+COLUMNS = [
+    ("CHP_CMD_ON", "chp.on", "1", "cmd"),
+    ("CHP_CMD_MOD", "chp.y_set", "1", "cmd"),
+    ("CB_CMD_U", "boiler.U_set", "V", "cmd"),
+    ("DHW_CMD_PUMP", "dhw_pump.on", "1", "cmd"),
+    ("HK_CMD_TM_VL", "mixer.T_sup_set", "degC", "cmd"),
+    ("HK_CMD_FW", "mixer.m_flow_set", "l/min", "cmd"),
+    ("WS_TM_AIR", "weather.T_air", "degC", "Tair"),
+    *[(f"TS_S_TM_BT_{i}", f"storage.T_sensor_{i}", "degC", "T") for i in range(1, 11)],
+    *[(f"WWS_S_TM_BT_{i}", f"dhw_storage.T_sensor_{i}", "degC", "T") for i in (1, 5, 10)],
+    ("CHP_S_TM_VL", "chp.T_sup", "degC", "T"),
+    ("CHP_S_TM_RL", "chp.T_ret", "degC", "T"),
+    ("CHP_P_el", "chp.P_el", "kW", "power"),
+    ("CHP_P_heat", "chp.Q_flow", "kW", "power"),
+    ("CHP_P_fuel", "chp.P_fuel", "kW", "power"),
+    ("CB_S_TM_VL", "boiler.T_sup", "degC", "T"),
+    ("CB_S_TM_RL", "boiler.T_ret", "degC", "T"),
+    ("CB_S_FW_VL", "boiler.m_flow", "l/min", "flow"),
+    ("CB_P_heat", "boiler.Q_flow", "kW", "power"),
+    ("CB_P_fuel", "boiler.P_fuel", "kW", "power"),
+    ("HK_S_TM_VL", "mixer.T_sup", "degC", "T"),
+    ("HK_S_TM_RL", "mixer.T_ret", "degC", "T"),
+    ("HK_S_FW_VL", "mixer.m_flow", "l/min", "flow"),
+    ("WWS_S_FW_CHARGE", "dhw_pump.m_flow", "l/min", "flow"),
+    ("WW_S_FW_TAP", "dhw.m_flow_hot", "l/min", "flow"),
+    ("HS_S_TM_VL", "switch.T_sup", "degC", "T"),
+    ("HS_S_TM_RL", "switch.T_ret", "degC", "T"),
+    ("ZONE_S_TM_ROOM", "zone.T_room", "degC", "T"),
+]
+NOISE = {"T": (0.07, 0.1), "Tair": (0.1, 0.1), "flow": (0.01, 0.1), "power": (0.01, 0.01)}
+FMT = {"cmd": "%.6g", "T": "%.1f", "Tair": "%.1f", "flow": "%.1f", "power": "%.2f"}
+GZIP_ABOVE = 2_000_000  # bytes
+# the true (noise-free) quantities logged in meta.json / used for effect sizes
+TRUTH_AUX = ("chp.mode", "chp.T_sup", "chp.T_ret", "chp.m_flow", "chp.m_flow_pump", "mixer.m_flow_primary", "mixer.m_flow", "chp.on",
+             "chp.Q_flow_true", "chp.Q_flow_meter", "boiler.m_flow", "dhw_pump.m_flow")
+
+
+def _to_unit(value: np.ndarray, unit: str) -> np.ndarray:
+    if unit == "l/min":
+        return value / RHO * 1000.0 * 60.0
+    if unit == "kW":
+        return value / 1000.0
+    return value
+
+
+def build_house(case: str, start: str, magnitude: float | None):
+    """The plant that generates `case` and the truth parameters written to meta.json."""
+    if case not in CASES:
+        raise ConfigError(f"case {case!r}: unknown; known: {', '.join(CASES)}")
+    mag = CASES[case][1] if magnitude is None else float(magnitude)
+    from . import hydraulic_network as net
+    from .house import load_truth
+
+    if case == "nominal":
+        from ..house import load_house
+
+        return load_house("house1", start=start), {"plant": "ideal twin (plant.house.load_house)"}
+    ideal = {"enabled": False}
+    if case == "concealed_idle_flow":
+        if not mag > 0:
+            raise ConfigError(f"--magnitude {mag}: the conductance factor must be > 0")
+        k = net.NetworkParams().k_chp / mag**2
+        h = load_truth("house1", start=start, network={"k_chp": k}, storage_layers=80, inlet_mixing_layers=2)
+    elif case == "storage_heat_loss":
+        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=1,
+                       overrides={"storage.UA_loss": mag})
+    elif case == "sensor_lag":
+        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=1,
+                       sensor_lag={10: mag})
+    else:  # storage_mixing
+        layer_l = 800.0 / 40
+        n_mix = max(1, int(round(mag / layer_l)))
+        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=n_mix)
+    params = {
+        "plant": "plant.truth.TruthHouse (pressure-driven network)" if h.net_params.enabled
+        else "plant.truth.TruthHouse (ideal switch)",
+        "network": asdict(h.net_params),
+        "storage_layers": h._params["storage"].n_layers,
+        "storage_UA_loss_W_per_K": h._params["storage"].UA_loss,
+        "inlet_mixing_layers": h.inlet_mixing_layers,
+        "inlet_mixing_litres": h.inlet_mixing_layers * 1000.0 * h._params["storage"].volume
+        / h._params["storage"].n_layers,
+        "sensor_lag_s": {str(i + 1): float(v) for i, v in enumerate(h.sensor_lag) if v > 0},
+    }
+    return h, params
+
+
+def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "2021-01-10",
+                   seed: int = 1, magnitude: float | None = None, sample: float = 60.0,
+                   jitter: int = 2, command: str | None = None) -> dict:
+    """Run the case's plant with the rule-based controller and write a lab-like recording."""
+    if not days > 0:
+        raise ConfigError(f"--days {days}: must be positive")
+    if not sample >= 4 or sample != int(sample):
+        raise ConfigError(f"--sample {sample}: an integer number of seconds >= 4")
+    if not 0 <= jitter < sample / 2:
+        raise ConfigError(f"--jitter {jitter}: 0 … {sample / 2 - 1:g} s")
+    sample = int(sample)
+    out = Path(out)
+    rng = np.random.default_rng(seed)
+    house, params = build_house(case, start, magnitude)
+    mag = CASES[case][1] if magnitude is None else float(magnitude)
+    is_truth = hasattr(house, "aux")
+    n = int(days * 86400 // sample)
+    grid = np.arange(1, n + 1) * sample
+    offs = rng.integers(-jitter, jitter + 1, size=n) if jitter else np.zeros(n, dtype=int)
+    t_sample = grid + offs
+    t_sample[-1] = min(t_sample[-1], int(days * 86400))
+    names = house.catalogue.names
+    idx = {nm: i for i, nm in enumerate(names)}
+    cols = [c[1] for c in COLUMNS]
+    rows = np.zeros((n, len(COLUMNS)))
+    truth = {k: np.zeros(n) for k in TRUTH_AUX}
+    wall = _time.perf_counter()
+    t_prev = 0
+    for k in range(n):
+        dt = int(t_sample[k] - t_prev)
+        house.run(float(dt), dt=1.0, out_interval=float(dt))
+        t_prev = t_sample[k]
+        s = house.values()
+        rows[k] = [s[idx[c]] for c in cols]
+        for key in TRUTH_AUX:
+            if key in idx:
+                truth[key][k] = s[idx[key]]
+        if is_truth:
+            truth["chp.m_flow_pump"][k] = house.aux("chp.m_flow_pump")
+            truth["chp.Q_flow_true"][k] = house.aux("chp.Q_flow_true")
+            truth["chp.Q_flow_meter"][k] = house.aux("chp.Q_flow_meter")
+        else:
+            truth["chp.m_flow_pump"][k] = s[idx["chp.m_flow"]]
+            truth["chp.Q_flow_true"][k] = s[idx["chp.Q_flow"]]
+            truth["chp.Q_flow_meter"][k] = s[idx["chp.Q_flow"]]
+    wall = _time.perf_counter() - wall
+    ledger = house.ledger()
+    effect = effect_sizes(truth, sample)
+    if is_truth:
+        # the ideal twin with the same controller, start and duration (what a simulation predicts)
+        from ..house import load_house
+
+        twin = load_house("house1", start=start)
+        twin.run(float(t_sample[-1]), dt=1.0, out_interval=float(t_sample[-1]))
+        Lt = twin.ledger()
+        effect["chp_heat_truth_kWh"] = ledger["heat_chp"] / 3.6e6
+        effect["chp_heat_ideal_twin_closed_loop_kWh"] = Lt["heat_chp"] / 3.6e6
+        effect["chp_heat_error_ideal_twin_vs_truth"] = (Lt["heat_chp"] - ledger["heat_chp"]) / ledger["heat_chp"]
+        effect["boiler_heat_error_ideal_twin_vs_truth"] = (Lt["heat_boiler"] - ledger["heat_boiler"]) / max(
+            ledger["heat_boiler"], 1e-9)
+
+    # measurement model
+    data = {}
+    for j, (col, sig, unit, kind) in enumerate(COLUMNS):
+        v = _to_unit(rows[:, j].copy(), unit)
+        if kind in NOISE:
+            sd, q = NOISE[kind]
+            if kind in ("flow", "power"):
+                v = v * (1.0 + rng.normal(0.0, sd, n))
+            else:
+                v = v + rng.normal(0.0, sd, n)
+            v = np.round(v / q) * q
+            v[v == 0] = 0.0  # no "-0.0"
+        data[col] = v
+    t_logged = np.round(t_sample + rng.uniform(-0.5, 0.5, n), 3)
+
+    out.mkdir(parents=True, exist_ok=True)
+    for old in ("recording.csv", "recording.csv.gz"):
+        (out / old).unlink(missing_ok=True)
+    buf = io.StringIO()
+    buf.write(",".join(["time"] + [c[0] for c in COLUMNS]) + "\n")
+    fmts = ["%.3f"] + [FMT[c[3]] for c in COLUMNS]
+    np.savetxt(buf, np.column_stack([t_logged] + [data[c[0]] for c in COLUMNS]), delimiter=",",
+               fmt=fmts)
+    text = buf.getvalue()
+    if len(text) > GZIP_ABOVE:
+        csv_name = "recording.csv.gz"
+        with gzip.open(out / csv_name, "wt", compresslevel=9) as fh:
+            fh.write(text)
+    else:
+        csv_name = "recording.csv"
+        (out / csv_name).write_text(text)
+    toml = ["# lab tag -> twin catalogue signal (`twin signals house1`) and the column's unit",
+            "[recording]", f'start = "{start}"', f'file = "{csv_name}"', "", "[columns]"]
+    toml += [f'"{c[0]}" = "{c[1]}"' for c in COLUMNS] + ["", "[units]"]
+    toml += [f'"{c[0]}" = "{c[2]}"' for c in COLUMNS]
+    (out / "columns.toml").write_text("\n".join(toml) + "\n")
+
+    meta = {
+        "case": case, "description": CASES[case][0], "magnitude": mag,
+        "magnitude_meaning": CASES[case][2], "seed": seed, "start": start, "days": days,
+        "sample_s": sample, "jitter_s": jitter, "timestamp_error_s": 0.5,
+        "rows": n, "file": csv_name, "columns": [c[0] for c in COLUMNS],
+        "noise": {"temperature_K": NOISE["T"][0], "temperature_quantum_K": NOISE["T"][1],
+                  "outdoor_temperature_K": NOISE["Tair"][0], "flow_relative": NOISE["flow"][0],
+                  "flow_quantum_l_per_min": NOISE["flow"][1], "power_relative": NOISE["power"][0],
+                  "power_quantum_kW": NOISE["power"][1]},
+        "chp_heat_meter": "CHP_P_heat = heat meter of the CHP branch (m cp (T_sup - T_ret)); its flow "
+                          "sensor is not logged: no recorded column shows the flow through the CHP",
+        "truth_parameters": params,
+        "effect": effect,
+        "ledger_kWh": {k: ledger[k] / 3.6e6 for k in ("fuel", "heat_chp", "heat_boiler",
+                                                       "heat_building", "heat_dhw", "losses",
+                                                       "delta_stored", "residual")},
+        "ledger_closure": ledger["closure"],
+        "generation_wall_s": round(wall, 2),
+        "command": command or (f"twin make-recording --case {case} --days {days:g} --start {start} "
+                               f"--seed {seed}" + (f" --magnitude {mag:g}" if mag is not None else "")
+                               + f" --out {out}"),
+    }
+    (out / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
+    return meta
+
+
+def effect_sizes(truth: dict, sample: float) -> dict:
+    """True (noise-free, sample-based) effect sizes: flow through the idle CHP, its share of the
+    heating flow, suction by the boiler, CHP heat true vs metered."""
+    mode = truth["chp.mode"]
+    on = (mode >= 0.5) & (mode <= 3.5)
+    idle = (mode < 0.5) | (mode > 4.5)
+    heat = idle & (truth["mixer.m_flow_primary"] > 0.02) & (truth["boiler.m_flow"] <= 0.0)
+    both = on & (truth["boiler.m_flow"] > 0.01)
+    e = {}
+    if heat.any():
+        m = truth["chp.m_flow"][heat]
+        e["idle_chp_flow_mean_kg_s"] = float(m.mean())
+        e["idle_chp_flow_p90_kg_s"] = float(np.percentile(m, 90))
+        e["idle_chp_share_of_heating_primary_flow"] = float(m.sum() / truth["mixer.m_flow_primary"][heat].sum())
+        e["idle_chp_share_of_heating_circuit_flow"] = float(m.sum() / truth["mixer.m_flow"][heat].sum())
+        e["idle_samples_with_heating"] = int(heat.sum())
+    if both.any():
+        ideal = truth["chp.Q_flow_true"][both] / (4180.0 * np.maximum(80.0 - truth["chp.T_ret"][both], 1.0))
+        e["chp_flow_mean_chp_and_boiler_running_kg_s"] = float(truth["chp.m_flow"][both].mean())
+        e["chp_ideal_flow_80degC_same_heat_kg_s"] = float(ideal.mean())
+        e["suction_chp_flow_over_ideal_flow"] = float(truth["chp.m_flow"][both].sum() / max(ideal.sum(), 1e-12))
+        e["samples_chp_and_boiler_running"] = int(both.sum())
+    if on.any():
+        e["chp_outlet_mean_degC_steady_running"] = float(truth["chp.T_sup"][on & (mode > 2.5)].mean()) \
+            if (on & (mode > 2.5)).any() else float("nan")
+        e["chp_own_pump_share_of_chp_flow_running"] = float(
+            truth["chp.m_flow_pump"][on].sum() / max(truth["chp.m_flow"][on].sum(), 1e-12))
+    e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow_true"].sum() * sample / 3.6e6)
+    e["chp_running_hours"] = float(on.sum() * sample / 3600.0)
+    return e
+
+
+def read_recording(path: str | Path):
+    """(time [s], {column: values}, {column: unit}, start) of a recording directory (csv or csv.gz)."""
+    import csv
+
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # pragma: no cover
+        import tomli as tomllib
+    p = Path(path)
+    doc = tomllib.loads((p / "columns.toml").read_text())
+    f = p / doc.get("recording", {}).get("file", "recording.csv")
+    opener = gzip.open if f.suffix == ".gz" else open
+    with opener(f, "rt", newline="") as fh:
+        rows = list(csv.reader(fh))
+    header = rows[0]
+    arr = np.array(rows[1:], dtype=float)
+    data = {h: arr[:, i] for i, h in enumerate(header) if h != "time"}
+    return arr[:, header.index("time")], data, doc["units"], doc.get("recording", {}).get("start")

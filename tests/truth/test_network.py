@@ -1,0 +1,46 @@
+"""Pressure-driven network of the truth: mass conservation, idle flow, suction."""
+import numpy as np
+import pytest
+
+from plant.truth import hydraulic_network as net
+
+P = net.pack(net.NetworkParams())
+
+
+def _solve(m_b, m_dem, fixed=False, m_c=0.0):
+    sol = np.zeros(net.N_SOL)
+    res = net.solve(P, m_b, m_dem, fixed, m_c, 0.0, 0.0, 0.0, sol)
+    return res, sol
+
+
+@pytest.mark.parametrize("m_b,m_dem,fixed,m_c", [
+    (0.0, 0.2, False, 0.0), (0.25, 0.2, False, 0.0), (0.25, 0.0, False, 0.0), (0.0, 0.0, False, 0.0),
+    (0.25, 0.5, True, 0.03), (0.0, 0.2, True, 0.03), (0.3, 0.1, True, 0.12), (0.0, 0.533, False, 0.0)])
+def test_mass_is_conserved_at_every_node(m_b, m_dem, fixed, m_c):
+    res, s = _solve(m_b, m_dem, fixed, m_c)
+    assert res < 1e-10
+    S = s[net.X_M_STORAGE] + s[net.X_M_CHP_LINE] + m_b - m_dem
+    J = s[net.X_M_CHP] + s[net.X_M_LINK] - s[net.X_M_CHP_LINE] - m_b
+    R = m_dem - s[net.X_M_STORAGE] - s[net.X_M_CHP] - s[net.X_M_LINK]
+    assert abs(S) < 1e-10 and abs(J) < 1e-10 and abs(R) < 1e-10
+    assert s[net.X_M_LINK] >= 0.0 and s[net.X_M_CHP_LINE] >= 0.0  # check valves
+
+
+def test_idle_chp_carries_a_share_of_the_heating_flow():
+    _, s = _solve(0.0, 0.2)
+    share = s[net.X_M_CHP] / 0.2
+    assert 0.15 < share < 0.35  # calibrated: 20-30 % of the heating flow
+
+
+def test_running_boiler_sucks_flow_through_the_chp():
+    _, idle = _solve(0.0, 0.0)
+    assert abs(idle[net.X_M_CHP]) < 1e-6  # nothing runs: no flow
+    _, s = _solve(0.25, 0.1)
+    assert s[net.X_PJ] < 0.0 < s[net.X_M_CHP]  # J below the return header: suction
+    assert s[net.X_M_CHP] > 0.05
+
+
+def test_pump_speed_follows_the_affinity_law():
+    assert net.pump_speed(0.0, 100.0, 4e4, 1e5, 1e5) == 0.0
+    n = net.pump_speed(0.2, 0.0, 4e4, 2e5, 1.5e5)
+    assert abs(4e4 * n * n - 3.5e5 * 0.04) < 1e-6

@@ -1,0 +1,75 @@
+"""The truth plant: idle CHP cools, suction above the own pump flow, ledger, ideal mode = twin."""
+import numpy as np
+import pytest
+
+from plant.house import load_house
+from plant.truth import load_truth
+
+
+@pytest.fixture(scope="module")
+def truth():
+    return load_truth("house1", start="2021-01-10", controller="external")
+
+
+def _drive(h, chp_on, boiler_u, m_heat=0.25):
+    for name, v in (("chp.on", chp_on), ("chp.y_set", 1.0), ("boiler.U_set", boiler_u),
+                    ("dhw_pump.on", 0.0), ("mixer.T_sup_set", 60.0), ("mixer.m_flow_set", m_heat)):
+        h.set(name, v)
+
+
+def test_idle_chp_sees_flow_and_its_outlet_cools(truth):
+    truth.reset()
+    _drive(truth, 1.0, 0.0)
+    truth.run(3600.0, dt=1.0, out_interval=3600.0)
+    T_hot = truth.get("chp.T_sup")
+    assert T_hot > 55.0  # below 80 degC: part of the heating deficit is forced through the CHP
+    _drive(truth, 0.0, 0.0)
+    truth.run(1800.0, dt=1.0, out_interval=1800.0)
+    m = truth.get("chp.m_flow")
+    assert truth.get("chp.mode") == 0.0 and truth.aux("chp.m_flow_pump") == 0.0
+    assert 0.02 < m < 0.15
+    assert 0.15 < m / truth.get("mixer.m_flow_primary") < 0.4
+    assert truth.get("chp.T_sup") < T_hot - 15.0
+    assert abs(truth.get("chp.T_sup") - truth.get("chp.T_ret")) < 2.0  # flushed to the return
+
+
+def test_boiler_suction_raises_chp_flow_above_its_own_pump(truth):
+    truth.reset()
+    _drive(truth, 1.0, 10.0, m_heat=0.2)
+    truth.run(3600.0, dt=1.0, out_interval=3600.0)
+    assert truth.get("boiler.m_flow") > 0.1 and truth.get("chp.mode") == 3.0
+    m_c = truth.get("chp.m_flow")
+    ideal = truth.aux("chp.Q_flow_true") / (4180.0 * (80.0 - truth.get("chp.T_ret")))
+    assert m_c > 1.3 * ideal and m_c > truth.aux("chp.m_flow_pump")
+    assert truth.get("chp.T_sup") < 78.0  # the forced flow lowers the outlet temperature
+
+
+def test_ledger_closes_and_network_converges():
+    h = load_truth("house1", start="2021-01-10")
+    h.run(2 * 86400.0, dt=1.0, out_interval=3600.0)
+    L = h.ledger()
+    assert L["fuel"] > 0 and L["closure"] < 1e-6
+    assert h.aux("network.residual") < 1e-9
+
+
+def test_ideal_mode_reproduces_the_twin():
+    tw = load_house("house1", start="2021-01-10")
+    tr = load_truth("house1", start="2021-01-10", network={"enabled": False}, storage_layers=40,
+                    inlet_mixing_layers=1)
+    _, a = tw.run(6 * 3600.0, dt=1.0, out_interval=600.0)
+    _, b = tr.run(6 * 3600.0, dt=1.0, out_interval=600.0)
+    i = tw.catalogue.names.index("switch.Q_loss")
+    a[:, i] = b[:, i] = 0.0  # the truth adds the (idle) coupling-point pipe's loss
+    assert np.allclose(a, b, rtol=1e-9, atol=1e-6)
+
+
+def test_sensor_lag_and_inlet_mixing_options():
+    h = load_truth("house1", start="2021-01-10", network={"enabled": False}, storage_layers=40,
+                   inlet_mixing_layers=8, sensor_lag={10: 600.0})
+    h.run(6 * 3600.0, dt=1.0, out_interval=3600.0)
+    assert h.ledger()["closure"] < 1e-6
+    from plant.components.storage import sensor_temperatures
+
+    raw = sensor_temperatures(h._x[2])
+    assert abs(h.get("storage.T_sensor_9") - raw[8]) < 1e-9  # not lagged
+    assert 0.0 < abs(h.get("storage.T_sensor_10") - raw[9]) < 10.0  # lagged
