@@ -9,6 +9,13 @@
 
 Deterministic: the same house file, start and inputs give the same results bit for bit.
 Not thread-safe: callers that serve it to several clients serialise access.
+
+Heating storage as an FMU ([storage] fmu = ... in the house file, see plant/housefile.py): every
+internal step then runs solver.before_storage (compiled), the FMU's doStep through
+plant.fmu.component.FmuComponent, and solver.after_storage (compiled), from Python - the same
+clock and step order as the native loop, about 100x slower.  The FMU's T_out and Q_loss enter
+the ledger; its T_layer outputs are the storage state (sensors, SOC, stored energy).
+snapshot/restore are not available then (the FMU's state cannot be copied).
 """
 from __future__ import annotations
 
@@ -118,12 +125,15 @@ class House:
              np.zeros(0, dtype=np.int64)),
         )
         self._controller = controller
+        self._fmu = FmuStorage(spec.storage_fmu, st.n_layers) if spec.storage_fmu else None
         self.reset()
 
     # --- state -----------------------------------------------------------------------------
     def reset(self) -> None:
         self.t = 0.0
         self._x = tuple(a.copy() for a in self._x0)
+        if self._fmu is not None:
+            self._fmu.reset(self._x[STATE_ORDER.index("storage")])
         self._s = np.zeros(len(CATALOGUE))
         self._remote = np.zeros(len(CATALOGUE), dtype=np.bool_)
         self._ledger = np.zeros(len(solver.LEDGER_NAMES))
@@ -136,7 +146,15 @@ class House:
             raise RuntimeError("compiled plant kernel is stale (signal catalogue changed): delete the "
                                "__pycache__ folders under plant/ and run again")
 
+    def close(self) -> None:
+        """Free the storage FMU's instance (if any); the house cannot step afterwards."""
+        if self._fmu is not None:
+            self._fmu.close()
+
     def snapshot(self) -> Snapshot:
+        if self._fmu is not None:
+            raise ConfigError(f"{self.name}: snapshot/restore are not available while the heating "
+                              "storage is an FMU (its state cannot be copied)")
         return Snapshot(self.t, tuple(a.copy() for a in self._x), self._s.copy(), self._remote.copy(),
                         self._ledger.copy())
 
@@ -179,6 +197,10 @@ class House:
     def _advance(self, dt: float, n: int, out=None, rec_every: int = 0) -> int:
         h = dt / n
         out = out if out is not None else np.zeros((0, len(CATALOGUE) + 1))
+        if self._fmu is not None:
+            rows = self._fmu.advance(self, n, h, out, rec_every)
+            self.t += dt
+            return rows
         rows = solver.run(n, h, self.t, self._x, self._p, self._tabs, self._prof, self._ports,
                           self._s, self._remote, self._ledger, out, rec_every)
         self.t += dt
@@ -245,3 +267,66 @@ class House:
         L["residual"] = heat_in - (L["heat_building"] + L["heat_dhw"] + losses + dE)
         L["closure"] = abs(L["residual"]) / fuel if fuel > 0 else abs(L["residual"])
         return L
+
+
+class FmuStorage:
+    """The heating storage as a co-simulation FMU, stepped between solver.before_storage and
+    solver.after_storage (see the module docstring)."""
+
+    def __init__(self, spec: housefile.StorageFmuSpec, n_layers: int):
+        self.spec = spec
+        self.n = n_layers
+        self._comp = None
+
+    def reset(self, T_st: np.ndarray) -> None:
+        """(Re)instantiate the FMU at time 0 and take its initial layer temperatures as the state."""
+        from .fmu.component import FmuComponent
+
+        self.close()
+        b = self.spec.bindings
+        roles = housefile.STORAGE_ROLES
+        inputs = {r: (b[r][0], roles[r][1], b[r][1]) for r in ("m_flow", "T_in_top", "T_in_bottom")}
+        var, unit = b["T_layer"]
+        outputs = {f"T_layer_{i}": (var.replace("{i}", str(i)), "degC", unit) for i in range(1, self.n + 1)}
+        outputs["T_out"] = (b["T_out"][0], "degC", b["T_out"][1])
+        outputs["Q_loss"] = (b["Q_loss"][0], "W", b["Q_loss"][1])
+        self._extra = []  # (signal index, output position) of optional roles
+        for role, signal in (("T_top", "storage.T_top"), ("T_bottom", "storage.T_bot"),
+                             *((f"T_sensor_{i}", f"storage.T_sensor_{i}") for i in range(1, 11))):
+            if role in b:
+                self._extra.append((CATALOGUE.index(signal), len(outputs)))
+                outputs[role] = (b[role][0], "degC", b[role][1])
+        self._comp = FmuComponent(self.spec.path, inputs=inputs, outputs=outputs,
+                                  parameters=self.spec.parameters, start_time=0.0)
+        y = self._comp.read_outputs()
+        T_st[:] = y[:self.n]
+        self._y = y
+
+    def advance(self, house: "House", n: int, h: float, out: np.ndarray, rec_every: int) -> int:
+        x, p, ports, s = house._x, house._p, house._ports, house._s
+        T_st = x[STATE_ORDER.index("storage")]
+        out_T = ports[1][3]
+        comp, N = self._comp, self.n
+        rows = 0
+        for k in range(n):
+            t = house.t + k * h
+            mid = solver.before_storage(t, h, x, p, house._tabs, house._prof, ports, s, house._remote)
+            comp.set_inputs((mid[solver.M_M_CHARGE] - mid[solver.M_M_DISCHARGE], mid[solver.M_T_SH],
+                             mid[solver.M_T_RH]))
+            y = comp.step(h) if h > 0.0 else self._y
+            self._y = y
+            T_st[:] = y[:N]
+            out_T[0] = y[N]
+            solver.after_storage(t, h, x, p, ports, s, house._ledger, mid, float(y[N + 1]))
+            for i_sig, i_out in self._extra:
+                s[i_sig] = y[i_out]
+            if rec_every > 0 and (k + 1) % rec_every == 0 and rows < out.shape[0]:
+                out[rows, 0] = t + h
+                out[rows, 1:] = s
+                rows += 1
+        return rows
+
+    def close(self) -> None:
+        if self._comp is not None:
+            self._comp.close()
+            self._comp = None

@@ -2,6 +2,27 @@
 
 Messages name the file, the line, the key and what is allowed, e.g.
     plant/houses/house1.toml:42 [storage] n_layers = 0: out of range; allowed 3 … 200 1
+
+The heating storage can be an FMI co-simulation FMU instead of the native kernel:
+
+    [storage]
+    fmu = "storage.fmu"          # path, relative to the house file
+    volume = 0.8                 # the plant's view of the tank: SOC, E_stored, stored energy
+    n_layers = 40                # = number of T_layer outputs bound below
+    [storage.bindings]           # role = "FMU variable" or { var = "...", unit = "K" }
+    m_flow = "m_flow"            # inputs: signed flow (> 0 charging: in at the top, out at the bottom)
+    T_in_top = "T_in_top"
+    T_in_bottom = "T_in_bottom"
+    T_out = "T_out"              # outputs: mean outflow temperature over the step
+    Q_loss = "Q_loss"            #   heat loss over the step
+    T_layer = "T_layer[{i}]"     #   layer temperatures, {i} = 1 (top) ... n_layers
+    [storage.parameters]         # FMU parameters: name = value or { value = ..., unit = "degC" }
+    n_layers = 40
+
+`unit` names the unit of the FMU variable; it is converted to the plant's unit of the role
+(STORAGE_ROLES) and must agree with the unit the FMU declares (if it declares one).
+Optional roles T_top, T_bottom, T_sensor_1 ... T_sensor_10 overwrite those storage signals with
+the FMU's own values after every step.
 """
 from __future__ import annotations
 
@@ -60,6 +81,96 @@ class Connections:
     pump_coupling_chp: float = 0.0  # share of the boiler flow forced through the CHP
 
 
+# heating-storage FMU roles -> (causality, plant unit); T_layer is a template over the layers
+STORAGE_ROLES = {
+    "m_flow": ("input", "kg/s"), "T_in_top": ("input", "degC"), "T_in_bottom": ("input", "degC"),
+    "T_out": ("output", "degC"), "Q_loss": ("output", "W"), "T_layer": ("output", "degC"),
+    "T_top": ("output", "degC"), "T_bottom": ("output", "degC"),
+    **{f"T_sensor_{i}": ("output", "degC") for i in range(1, 11)},
+}
+STORAGE_REQUIRED = ("m_flow", "T_in_top", "T_in_bottom", "T_out", "Q_loss", "T_layer")
+
+
+@dataclass(frozen=True)
+class StorageFmuSpec:
+    """The heating storage as an FMU: file, role -> (FMU variable, FMU unit or None), parameters."""
+
+    path: Path
+    bindings: dict  # role -> (variable, unit | None); T_layer's variable holds "{i}"
+    parameters: dict  # FMU variable -> (value, unit | None)
+
+
+def _storage_fmu(values: dict, path: Path, text: str, problems: list) -> StorageFmuSpec | None:
+    """Pop `fmu`, `bindings`, `parameters` from the [storage] table and validate them."""
+    from .fmu.component import UNITS
+
+    fmu = values.pop("fmu", None)
+    bindings = values.pop("bindings", None)
+    parameters = values.pop("parameters", None)
+    if fmu is None:
+        for key, v in (("bindings", bindings), ("parameters", parameters)):
+            if v is not None:
+                problems.append(f"{path}:{_line(text, 'storage.' + key)} [storage.{key}]: only with "
+                                f"[storage] fmu = \"file.fmu\" (the storage is native otherwise)")
+        return None
+    where = f"{path}:{_line(text, 'storage', 'fmu')} [storage] fmu"
+    if not isinstance(fmu, str) or not fmu:
+        problems.append(f"{where} = {fmu!r}: must be the path of a .fmu file (string)")
+        return None
+    fmu_path = Path(fmu) if Path(fmu).is_absolute() else path.parent / fmu
+    if not fmu_path.is_file():
+        problems.append(f"{where} = {fmu!r}: no such file ({fmu_path})")
+    out = {}
+    if not isinstance(bindings, dict):
+        problems.append(f"{where}: needs a [storage.bindings] table; required roles: "
+                        + ", ".join(STORAGE_REQUIRED))
+        bindings = {}
+    for role, b in bindings.items():
+        loc = f"{path}:{_line(text, 'storage.bindings', role)} [storage.bindings] {role}"
+        if role not in STORAGE_ROLES:
+            close = get_close_matches(role, STORAGE_ROLES, n=2)
+            problems.append(f"{loc}: unknown role; " + (f"did you mean {', '.join(close)}?" if close
+                                                       else f"allowed: {', '.join(STORAGE_ROLES)}"))
+            continue
+        if isinstance(b, str):
+            var, unit = b, None
+        elif isinstance(b, dict) and set(b) <= {"var", "unit"} and isinstance(b.get("var"), str):
+            var, unit = b["var"], b.get("unit")
+        else:
+            problems.append(f"{loc} = {b!r}: expected \"FMU variable\" or {{ var = \"...\", unit = \"K\" }}")
+            continue
+        ours = STORAGE_ROLES[role][1]
+        if unit is not None and (unit not in UNITS or UNITS[unit][0] != UNITS[ours][0]):
+            dim = UNITS[unit][0] if unit in UNITS else "unknown unit"
+            problems.append(f"{loc}: unit mismatch, unit = {unit!r} ({dim}) cannot be converted to the "
+                            f"role's {ours!r} ({UNITS[ours][0]})")
+            continue
+        if role == "T_layer" and "{i}" not in var:
+            problems.append(f"{loc} = {var!r}: must contain {{i}} (layer 1 = top ... n_layers), "
+                            "e.g. \"T_layer[{i}]\"")
+            continue
+        out[role] = (var, unit)
+    missing = [r for r in STORAGE_REQUIRED if r not in bindings]
+    if missing:
+        problems.append(f"{path}:{_line(text, 'storage.bindings')} [storage.bindings]: missing "
+                        f"role(s) {', '.join(missing)}")
+    params = {}
+    for name, v in (parameters or {}).items():
+        loc = f"{path}:{_line(text, 'storage.parameters', name)} [storage.parameters] {name}"
+        if isinstance(v, dict) and set(v) <= {"value", "unit"} and "value" in v:
+            value, unit = v["value"], v.get("unit")
+        else:
+            value, unit = v, None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            problems.append(f"{loc} = {v!r}: expected a number or {{ value = 70.0, unit = \"degC\" }}")
+            continue
+        if unit is not None and unit not in UNITS:
+            problems.append(f"{loc}: unit {unit!r} unknown; known: {', '.join(sorted(u for u in UNITS if u))}")
+            continue
+        params[name] = (value, unit)
+    return StorageFmuSpec(path=fmu_path, bindings=out, parameters=params)
+
+
 @dataclass(frozen=True)
 class HouseSpec:
     name: str
@@ -71,6 +182,7 @@ class HouseSpec:
     typeday: int  # 0: the 2021 year series; 1..11: a type-day block (profiles/loaders.py)
     params: dict  # section -> Params instance
     connections: Connections
+    storage_fmu: StorageFmuSpec | None = None  # the heating storage runs as this FMU
 
 
 def resolve(name_or_path: str | Path) -> Path:
@@ -135,11 +247,15 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
         problems.append(f"{path}:{_line(text, 'house', 'topology')} [house] topology = "
                         f"{house['topology']!r}: unknown; allowed: {', '.join(TOPOLOGIES)}")
     params = {}
+    storage_fmu = None
     for section, cls in COMPONENTS.items():
         values = doc.get(section, {})
         if not isinstance(values, dict):
             problems.append(f"{path}:{_line(text, section)} {section}: must be a table [{section}]")
             continue
+        if section == "storage":
+            values = dict(values)
+            storage_fmu = _storage_fmu(values, path, text, problems)
         try:
             params[section] = build_params(cls, values, f"[{section}]")
         except ConfigError as exc:
@@ -167,6 +283,17 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
             if getattr(connections, top) < getattr(connections, bot):
                 problems.append(f"{path}:{_line(text, 'connections', top)} [connections] {top} must be "
                                 f"above {bot}")
+    if storage_fmu is not None and "storage" in params:
+        n = params["storage"].n_layers
+        for key, want in (("storage_top_port", 0), ("storage_bottom_port", n - 1)):
+            try:
+                layer = storage.port_layer(getattr(connections, key), params["storage"])
+            except ConfigError:
+                continue  # reported above
+            if layer != want:
+                problems.append(f"{path}:{_line(text, 'connections', key)} [connections] {key}: the "
+                                f"storage FMU has ports only in its top and bottom layers; this height "
+                                f"is in layer {layer} of 0 … {n - 1}")
     prof = doc.get("profiles", {})
     typeday = prof.get("typeday", 0)
     if isinstance(typeday, bool) or not isinstance(typeday, int) or not 0 <= typeday <= 11:
@@ -189,4 +316,5 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> HouseSpec:
         name=house["name"], path=path, description=house.get("description", ""),
         start=str(house.get("start", "2021-01-01")), household_kwh_per_year=float(kwh),
         dhw_litres_per_day=float(litres), typeday=typeday, params=params, connections=connections,
+        storage_fmu=storage_fmu,
     )

@@ -1,7 +1,9 @@
 """The one fmpy adapter: run an FMI 2.0/3.0 co-simulation FMU with its variables bound to our signals.
 
 A binding names our signal, the FMU variable and the unit our signal is in (temperatures degC,
-flows kg/s, powers W in the plant).  The FMU's declared unit may differ; `unit_conversion` is the
+flows kg/s, powers W in the plant), optionally a third element: the unit the FMU variable is in,
+for FMUs that declare none (if the FMU declares one, both must agree).  The FMU's declared unit
+may differ from ours; `unit_conversion` is the
 ONE place where values are converted (K <-> degC, l/min <-> kg/s, kW <-> W, ...).  Every failure -
 corrupt zip, no binary for this platform, unknown variable, unit that cannot be converted, FMI call
 failure - is an FmuError that names the FMU file and, where there is one, the variable.
@@ -111,14 +113,22 @@ class FmuComponent:
 
     def _bind(self, spec, causalities, role):
         names, vrs, a_list, b_list = [], [], [], []
-        for signal, (variable, unit) in spec.items():
+        for signal, binding in spec.items():
+            variable, unit = binding[0], binding[1]
+            stated = binding[2] if len(binding) > 2 else None  # the unit the binding says the FMU uses
             v = self._variable(variable, role)
             if v.causality not in causalities:
                 raise FmuError(f"{self.path}: variable '{variable}' has causality '{v.causality}', "
                                f"it cannot be bound as {role} (allowed: {', '.join(causalities)})")
             if v.type not in ("Real", "Float64", "Float32"):
                 raise FmuError(f"{self.path}: variable '{variable}' is {v.type}; only Real variables bind to signals")
-            a, b = unit_conversion(unit, v.unit, f"{self.path}: variable '{variable}' (signal '{signal}')")
+            theirs = v.unit
+            if stated is not None:
+                if theirs and stated != theirs:
+                    raise FmuError(f"{self.path}: variable '{variable}' (signal '{signal}'): unit mismatch, "
+                                   f"the binding says '{stated}' but the FMU declares '{theirs}'")
+                theirs = stated
+            a, b = unit_conversion(unit, theirs, f"{self.path}: variable '{variable}' (signal '{signal}')")
             names.append(signal)
             vrs.append(self._md_vr(variable))
             a_list.append(a)
