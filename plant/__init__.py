@@ -1,1 +1,31 @@
-"""Simulated CoSES house: components, houses, profiles binding, signal catalogue."""
+"""Simulated CoSES house: components, houses, profiles binding, signal catalogue.
+
+Compiled kernels are cached on disk by numba, which invalidates a cache entry only when the
+function's own file changes — not when a component it calls changes. The cache therefore lives
+in a directory named after a hash of every source file the kernels are built from, so any edit
+gives a fresh, consistent cache (set HOUSE_TWIN_CACHE to choose the parent directory).
+"""
+import hashlib
+import os
+from pathlib import Path
+
+_HERE = Path(__file__).parent
+
+
+def _source_hash() -> str:
+    h = hashlib.sha256()
+    for path in sorted([*_HERE.rglob("*.py"), _HERE.parent / "profiles" / "loaders.py"]):
+        if path.exists():
+            h.update(path.name.encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+_cache = Path(os.environ.get("HOUSE_TWIN_CACHE", Path.home() / ".cache" / "house-twin")) / _source_hash()
+os.environ["NUMBA_CACHE_DIR"] = str(_cache)
+try:
+    import numba
+
+    numba.config.CACHE_DIR = str(_cache)  # numba may have read its config before this import
+except ImportError:  # pragma: no cover - numba is a hard dependency
+    pass

@@ -34,10 +34,21 @@ class Params:
     chp_modulation: float = param(1.0, "1", "CHP modulation when on", 0.55, 1.0)
     boiler_demand: float = param(10.0, "V", "boiler 0-10 V demand when on", 2.1, 10.0)
     period: float = param(1.0, "s", "scan period: the rules are evaluated this often (a PLC's cycle)", 0.0, 3600.0)
+    sensor_resolution: float = param(0.0, "K", "sensor resolution the rules see (0: exact; 0.1: as "
+                                     "the 0.1 degC registers of the device maps)", 0.0, 5.0)
 
 
 (CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, TOP_SENSOR, BOTTOM_SENSOR,
- DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND, PERIOD) = range(11)
+ DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND, PERIOD, SENSOR_RESOLUTION) = range(12)
+
+
+@njit(cache=True)
+def quantize(T, resolution):
+    """T rounded to the sensor resolution, half away from zero (as the device-map codec)."""
+    if resolution <= 0.0:
+        return T
+    q = T / resolution
+    return (np.floor(q + 0.5) if q >= 0.0 else -np.floor(-q + 0.5)) * resolution
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -53,6 +64,8 @@ def step(dt, x, p, T_top, T_bottom, T_dhw_top):
     if x[3] + 1e-9 < p[PERIOD]:
         return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]
     x[3] = 0.0
+    res = p[SENSOR_RESOLUTION]
+    T_top, T_bottom, T_dhw_top = quantize(T_top, res), quantize(T_bottom, res), quantize(T_dhw_top, res)
     if T_bottom > p[OFF_ABOVE]:
         x[0] = 0.0
         x[1] = 0.0

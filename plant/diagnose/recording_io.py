@@ -249,13 +249,12 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         if nan.any():
             causality = CATALOGUE.signal(sig).causality
             if causality == "input":
-                idx = np.where(~nan, np.arange(len(v)), 0)
-                np.maximum.accumulate(idx, out=idx)
                 first = np.flatnonzero(~nan)
                 if first.size == 0:
                     raise DataError(f"{sig}: every sample is missing")
-                v[:first[0]] = v[first[0]]
-                v[:] = v[idx] if first[0] == 0 else np.where(nan, v[np.maximum(idx, first[0])], v)
+                idx = np.where(~nan, np.arange(len(v)), first[0])
+                np.maximum.accumulate(idx, out=idx)
+                data[sig] = v = v[idx]
                 warnings.append(f"{sig}: {int(nan.sum())} missing command sample(s) held at the last value")
             else:
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")

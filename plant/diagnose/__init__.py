@@ -1,0 +1,77 @@
+"""`twin diagnose`: find the missing physics behind the mismatch between a recording and the twin.
+
+    from plant.diagnose import diagnose, recording_io
+    rec = recording_io.load("lab.csv", "columns.toml")
+    report = diagnose(rec, house="house1", out="report/")     # dict, also report/report.json
+
+Stages: replay (replay.py) -> locate (locate.py) -> hypothesise (effects/, search.py) ->
+fit and select (fit.py) -> report (report.py). Method and report.json schema: docs/diagnose.md.
+"""
+from __future__ import annotations
+
+import time
+
+from . import fit, locate, recording_io, replay, search  # noqa: F401
+from .context import Context
+from .effects import catalogue
+
+
+def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effects=None,
+             plots: bool = True, log=print) -> dict:
+    timing = {}
+    t0 = time.perf_counter()
+    warnings = list(rec.warnings)
+    warnings += replay.check(rec)
+    ctx = Context.build(rec, train_days=train_days)
+    rp = replay.Replayer(rec, house)
+    nominal_rows = rp.run()
+    warnings += rp.notes + rp.boundary_check(nominal_rows)
+    sim0 = nominal_rows[:, ctx.cols]
+    J0t, J0h = ctx.cost(sim0, ctx.train), ctx.cost(sim0, ctx.held)
+    timing["replay_nominal"] = time.perf_counter() - t0
+    log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "
+        f"({len(ctx.measured)} measured signals)")
+
+    # locate
+    t1 = time.perf_counter()
+    affected = locate.mismatched_signals(ctx, sim0, ctx.held)
+    loc = {"windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],
+           "mismatched_signals": affected}
+    timing["locate"] = time.perf_counter() - t1
+
+    # hypothesise and fit
+    t2 = time.perf_counter()
+    results = []
+    for e in (effects if effects is not None else catalogue()):
+        if not e.available:
+            results.append(fit.Result(e.id, e.component, e.kind, False, e.description, effect=e))
+            continue
+        ok, why = e.plausible(ctx)
+        if not ok:
+            results.append(fit.Result(e.id, e.component, e.kind, False, why, effect=e))
+            continue
+        r = fit.fit_simulate(e, ctx, rp, J0t) if e.kind == "simulate" else fit.fit_signal(e, ctx, sim0)
+        results.append(r)
+        log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
+            f"held-out cost {r.held_cost:.4g}")
+    fit.judge(results, ctx, J0t, J0h)
+    verdict, best, twins, explained = fit.select(results, ctx, sim0, affected)
+    timing["fit"] = time.perf_counter() - t2
+
+    t3 = time.perf_counter()
+    terms = search.search(ctx, nominal_rows, affected) if verdict != "no_missing_physics" else []
+    timing["search"] = time.perf_counter() - t3
+
+    from . import report as _report
+
+    t4 = time.perf_counter()
+    rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc,
+                        terms, warnings)
+    if out is not None:
+        _report.write(rep, out, ctx, nominal_rows, best, plots=plots)
+    timing["report"] = time.perf_counter() - t4
+    timing["total"] = time.perf_counter() - t0
+    rep["timing_s"] = timing
+    if out is not None:
+        _report.write_json(rep, out)
+    return rep

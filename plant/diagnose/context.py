@@ -1,0 +1,102 @@
+"""What every stage of the diagnosis shares: measured signals, windows, operating modes, costs."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..catalogue import CATALOGUE
+from .replay import comparable
+
+# normalisation of residuals per unit, so that one cost adds temperatures, flows and powers
+SCALE = {"degC": 1.0, "kg/s": 0.02, "W": 500.0}
+
+MODES = {
+    "chp_on": "CHP on",
+    "chp_off": "CHP off",
+    "boiler_on": "boiler on",
+    "heating_on": "heating pump on",
+    "dhw_on": "DHW charging on",
+    "chp_off_heating_on": "CHP off and heating pump on",
+}
+
+
+@dataclass
+class Context:
+    rec: object
+    measured: list
+    train: np.ndarray        # bool mask of samples used for fitting
+    held: np.ndarray         # bool mask of held-out samples
+    meas: np.ndarray         # [n, n_measured] measured values (NaN = missing)
+    ok: np.ndarray           # [n, n_measured] finite & valid
+    scale: np.ndarray
+    noise: np.ndarray        # estimated white-noise sigma per measured signal
+    flags: dict = field(default_factory=dict)
+    cols: np.ndarray | None = None  # catalogue indices of the measured signals
+
+    @classmethod
+    def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0):
+        measured = [s for s in comparable() if rec.has(s)]
+        t = rec.time
+        n = len(t)
+        valid = rec.valid if rec.valid is not None else np.ones(n, bool)
+        valid = valid & (t >= t[0] + warmup_h * 3600.0)
+        span = t[-1] - t[0]
+        t_split = t[0] + min(train_days * 86400.0, 0.4 * span)
+        train = valid & (t <= t_split)
+        held = valid & (t > t_split)
+        meas = np.column_stack([rec.data[s] for s in measured])
+        ok = np.isfinite(meas) & valid[:, None]
+        scale = np.array([SCALE.get(CATALOGUE.signal(s).unit, 1.0) for s in measured])
+        noise = np.zeros(len(measured))
+        for j in range(len(measured)):
+            d = np.diff(meas[:, j][np.isfinite(meas[:, j])])
+            if d.size > 10:
+                noise[j] = 1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0)
+        cmd = rec.data
+        chp_on = cmd["chp.on"] > 0.5
+        boiler_on = cmd["boiler.U_set"] > 2.0
+        heating_on = cmd["mixer.m_flow_set"] > 0.005
+        dhw_on = cmd["dhw_pump.on"] > 0.5
+        flags = {"chp_on": chp_on, "chp_off": ~chp_on, "boiler_on": boiler_on, "heating_on": heating_on,
+                 "dhw_on": dhw_on, "chp_off_heating_on": (~chp_on) & heating_on}
+        ctx = cls(rec, measured, train, held, meas, ok, scale, noise, flags)
+        ctx.cols = np.array([CATALOGUE.index(s) for s in measured])
+        ctx.t_split = t_split
+        return ctx
+
+    # --- modes -----------------------------------------------------------------------------
+    def mode_mask(self, name: str) -> np.ndarray:
+        return self.flags[name]
+
+    def mode_share(self, name: str) -> float:
+        return float(np.mean(self.flags[name]))
+
+    # --- costs -----------------------------------------------------------------------------
+    def residual(self, sim_meas: np.ndarray) -> np.ndarray:
+        """measured - simulated, [n, n_measured], NaN where not scored."""
+        r = self.meas[: len(sim_meas)] - sim_meas
+        return np.where(self.ok[: len(sim_meas)], r, np.nan)
+
+    def per_signal_mse(self, sim_meas: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        r = self.residual(sim_meas)
+        m = mask[: len(r)]
+        with np.errstate(invalid="ignore"):
+            return np.nanmean(r[m] ** 2, axis=0) if m.any() else np.full(r.shape[1], np.nan)
+
+    def cost(self, sim_meas: np.ndarray, mask: np.ndarray, per_signal: np.ndarray | None = None) -> float:
+        """Mean over signals of the normalised mean squared residual."""
+        mse = self.per_signal_mse(sim_meas, mask) if per_signal is None else per_signal
+        v = mse / self.scale ** 2
+        return float(np.nanmean(v))
+
+    def noise_cost(self) -> float:
+        return float(np.nanmean((self.noise / self.scale) ** 2))
+
+    def n_eff(self, mask: np.ndarray) -> float:
+        """Effective independent samples of a window (residuals are strongly autocorrelated:
+        counted as one per 30 min and signal group)."""
+        t = self.rec.time[mask]
+        if t.size < 2:
+            return 1.0
+        return max(2.0, (t[-1] - t[0]) / 1800.0)

@@ -1,0 +1,81 @@
+"""Missing-physics candidates: the base class, the parameter declaration and the registry.
+
+A candidate is a small parametric model that plugs into the twin, in one of two ways:
+  * kind = "simulate": `overrides(theta)` returns house-file overrides {"section.key": value}
+    (the knobs the compiled loop already carries); the replay is re-simulated with them;
+  * kind = "signal": `apply(t, y, theta)` post-processes one simulated signal (sensor lag,
+    offset, transport delay); no re-simulation, fitted per measured signal.
+
+Add your own: subclass Effect, set id/component/kind/params, implement overrides() or apply(),
+and register it:
+
+    from plant.diagnose.effects import Effect, Param, register
+
+    @register
+    class RadiatorFouling(Effect):
+        id = "radiator_fouling"
+        component = "radiator"
+        kind = "simulate"
+        params = (Param("Q_nominal", 4000.0, 8778.0, 8778.0, "W"),)
+        def overrides(self, theta):
+            return {"radiator.Q_nominal": theta[0]}
+
+(`twin diagnose --effects my_effects.py` imports such a file before the diagnosis.)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    lo: float
+    hi: float
+    nominal: float          # value of the nominal twin (the candidate "switched off")
+    unit: str
+    log: bool = False       # search on a log scale (lo must be > 0)
+
+
+class Effect:
+    id: str = ""
+    component: str = ""
+    kind: str = "simulate"  # or "signal"
+    params: tuple = ()
+    description: str = ""
+    available: bool = True  # False: declared but not testable with the current twin (reason in description)
+    signal_units: tuple = ("degC",)  # kind "signal": which measured signals it may apply to
+
+    def overrides(self, theta) -> dict:
+        raise NotImplementedError
+
+    def apply(self, t: np.ndarray, y: np.ndarray, theta) -> np.ndarray:
+        raise NotImplementedError
+
+    def plausible(self, ctx) -> tuple[bool, str]:
+        """Whether the recording can show this effect at all (ctx: diagnose.Context)."""
+        return True, ""
+
+    def summary(self, theta, ctx, sim=None) -> str:
+        """Plain-language size of the effect for the report."""
+        return ", ".join(f"{p.name} = {v:.4g} {p.unit}" for p, v in zip(self.params, theta))
+
+    def size(self, theta, ctx, sim=None) -> dict:
+        """Physical size(s) for report.json, e.g. {"kg/s": 0.07}; default: the parameters."""
+        return {p.name: float(v) for p, v in zip(self.params, theta)}
+
+
+REGISTRY: dict[str, type] = {}
+
+
+def register(cls):
+    if not getattr(cls, "id", ""):
+        raise ValueError(f"{cls.__name__}: an effect needs an id")
+    REGISTRY[cls.id] = cls
+    return cls
+
+
+def catalogue() -> list[Effect]:
+    return [cls() for cls in REGISTRY.values()]

@@ -1,0 +1,160 @@
+"""Locate the mismatch: per-signal metrics, time windows, operating modes, energy per component."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..catalogue import CATALOGUE
+from ..water import CP, RHO
+from .context import MODES
+
+KWH = 3.6e6
+
+
+def metrics(ctx, sim: np.ndarray, mask: np.ndarray) -> dict:
+    """RMSE, CV(RMSE) and NMBE (ASHRAE Guideline 14 style, in %) per measured signal."""
+    out = {}
+    r = ctx.residual(sim)
+    for j, s in enumerate(ctx.measured):
+        m = mask[: len(r)] & np.isfinite(r[:, j])
+        if not m.any():
+            continue
+        e = r[m, j]
+        mean_meas = float(np.mean(ctx.meas[m, j]))
+        denom = abs(mean_meas) if abs(mean_meas) > 1e-9 else np.nan
+        out[s] = {"rmse": float(np.sqrt(np.mean(e ** 2))), "bias": float(np.mean(e)),
+                  "robust": float(1.4826 * np.median(np.abs(e - np.median(e)))),
+                  "cvrmse_pct": float(100 * np.sqrt(np.mean(e ** 2)) / denom),
+                  "nmbe_pct": float(100 * np.sum(e) / (len(e) * denom))}
+    return out
+
+
+def mismatched_signals(ctx, sim, mask, tol: float = 0.3) -> list[str]:
+    """Signals whose mismatch is persistent, not switching spikes: |bias| or the robust spread of
+    the residual above tol x scale + 3 noise sigma (held-out window)."""
+    m = metrics(ctx, sim, mask)
+    out = []
+    for j, s in enumerate(ctx.measured):
+        if s not in m:
+            continue
+        lim = tol * ctx.scale[j] + 3.0 * ctx.noise[j]
+        if abs(m[s]["bias"]) > lim or m[s]["robust"] > lim:
+            out.append(s)
+    return out
+
+
+def windows(ctx, sim: np.ndarray, top: int = 5, hours: float = 1.0) -> list[dict]:
+    """Time windows that carry the error: 1-h rolling mean of the normalised squared residual."""
+    r = ctx.residual(sim)
+    z = np.nan_to_num((r / ctx.scale) ** 2)
+    tot = z.mean(axis=1)
+    t = ctx.rec.time[: len(tot)]
+    dt = float(np.median(np.diff(t)))
+    w = max(1, int(round(hours * 3600 / dt)))
+    roll = np.convolve(tot, np.ones(w) / w, mode="same")
+    thr = max(3.0 * np.median(roll), np.percentile(roll, 90))
+    hot = roll > thr
+    out = []
+    i = 0
+    n = len(hot)
+    while i < n:
+        if hot[i]:
+            j = i
+            while j < n and hot[j]:
+                j += 1
+            seg = slice(i, j)
+            share = float(tot[seg].sum() / max(tot.sum(), 1e-12))
+            per = z[seg].mean(axis=0)
+            order = np.argsort(per)[::-1][:3]
+            modes = {k: float(np.mean(v[seg])) for k, v in ctx.flags.items()}
+            out.append({"start_h": float(t[i] / 3600), "end_h": float(t[j - 1] / 3600), "error_share": share,
+                        "signals": [ctx.measured[k] for k in order],
+                        "modes": {MODES[k]: round(v, 2) for k, v in modes.items()}})
+            i = j
+        else:
+            i += 1
+    out.sort(key=lambda d: -d["error_share"])
+    return out[:top]
+
+
+def modes(ctx, sim: np.ndarray, mask: np.ndarray | None = None) -> list[dict]:
+    """Error concentration per operating mode (combinations of CHP/boiler/heating/DHW state)."""
+    r = ctx.residual(sim)
+    n = len(r)
+    mask = np.ones(n, bool) if mask is None else mask[:n]
+    z = np.nan_to_num((r / ctx.scale) ** 2)
+    tot = z.mean(axis=1)
+    f = ctx.flags
+    keys = ("chp_on", "boiler_on", "heating_on", "dhw_on")
+    code = sum((f[k][:n].astype(int) << i) for i, k in enumerate(keys))
+    out = []
+    total = float(tot[mask].sum()) or 1e-12
+    for c in np.unique(code[mask]):
+        sel = mask & (code == c)
+        time_share = float(sel.sum() / mask.sum())
+        if time_share < 0.01:
+            continue
+        err_share = float(tot[sel].sum() / total)
+        name = ", ".join(("" if (c >> i) & 1 else "not ") + k.replace("_on", "") + " on"
+                         for i, k in enumerate(keys))
+        name = name.replace("not chp on", "CHP off").replace("chp on", "CHP on")
+        name = name.replace("not boiler on", "boiler off").replace("not heating on", "heating pump off")
+        name = name.replace("heating on", "heating pump on").replace("not dhw on", "DHW charging off")
+        name = name.replace("dhw on", "DHW charging on")
+        bias = {}
+        for j, s in enumerate(ctx.measured):
+            e = r[sel, j]
+            e = e[np.isfinite(e)]
+            if e.size:
+                bias[s] = float(e.mean())
+        out.append({"mode": name, "time_share": time_share, "error_share": err_share,
+                    "concentration": err_share / time_share, "bias": bias})
+    out.sort(key=lambda d: -d["error_share"])
+    return out
+
+
+def _heat(ctx, rows_or_meas, kind: str, comp: str):
+    """Integrated heat [kWh] of a component from Q signal, or m cp dT when Q is not recorded."""
+    t = ctx.rec.time
+    dt = np.diff(t, prepend=t[0])
+    def get(name):
+        if kind == "sim":
+            return rows_or_meas[:, CATALOGUE.index(name)]
+        return ctx.rec.data.get(name)
+    q = get(f"{comp}.Q_flow")
+    if q is None and kind == "meas":
+        m, a, b = get(f"{comp}.m_flow"), get(f"{comp}.T_sup"), get(f"{comp}.T_ret")
+        if m is None or a is None or b is None:
+            return None
+        q = m * CP * (a - b)
+    q = np.nan_to_num(q[: len(dt)])
+    return float(np.sum(q * dt[: len(q)]) / KWH)
+
+
+def energy(ctx, nominal_rows, fitted_rows=None) -> dict:
+    """Heat per generator/consumer and storage energy change: measured vs simulated."""
+    out = {}
+    for comp in ("chp", "boiler", "mixer", "dhw_pump"):
+        meas = _heat(ctx, None, "meas", comp)
+        if meas is None:
+            continue
+        before = _heat(ctx, nominal_rows, "sim", comp)
+        d = {"measured_kWh": meas, "simulated_before_kWh": before,
+             "error_before_pct": 100 * (before - meas) / abs(meas) if abs(meas) > 1e-6 else None}
+        if fitted_rows is not None:
+            after = _heat(ctx, fitted_rows, "sim", comp)
+            d["simulated_after_kWh"] = after
+            d["error_after_pct"] = 100 * (after - meas) / abs(meas) if abs(meas) > 1e-6 else None
+        out[comp] = d
+    names = [f"storage.T_sensor_{i}" for i in range(1, 11)]
+    if all(ctx.rec.has(n) for n in names):
+        mass = RHO * 0.8
+        def dE(T):
+            T = np.asarray(T)
+            return float(mass * CP * (np.nanmean(T[-1]) - np.nanmean(T[0])) / KWH)
+        meas = dE(np.column_stack([ctx.rec.data[n] for n in names])[[0, -1]])
+        idx = [CATALOGUE.index(n) for n in names]
+        d = {"measured_kWh": meas, "simulated_before_kWh": dE(nominal_rows[[0, -1]][:, idx])}
+        if fitted_rows is not None:
+            d["simulated_after_kWh"] = dE(fitted_rows[[0, -1]][:, idx])
+        out["storage (change of stored heat)"] = d
+    return out

@@ -1,0 +1,204 @@
+"""The diagnosis report: plain-language finding, report.json (schema in docs/diagnose.md), plots."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..catalogue import CATALOGUE
+from . import locate
+
+SCHEMA = "twin-diagnose/1"
+
+
+def _rms(ctx, sim, mask, signals):
+    idx = [ctx.measured.index(s) for s in signals]
+    mse = ctx.per_signal_mse(sim, mask)[idx]
+    return float(math.sqrt(np.nanmean(mse))) if idx else math.nan
+
+
+def _clean(o):
+    if isinstance(o, dict):
+        return {str(k): _clean(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_clean(v) for v in o]
+    if isinstance(o, (np.floating, float)):
+        return None if not math.isfinite(float(o)) else float(o)
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, np.bool_):
+        return bool(o)
+    return o
+
+
+def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc, terms, warnings):
+    after = best.sim if best is not None else sim0
+    after_rows = best.rows if (best is not None and best.rows is not None) else nominal_rows
+    mb_all, ma_all = locate.metrics(ctx, sim0, ctx.train | ctx.held), locate.metrics(ctx, after, ctx.train | ctx.held)
+    mb_h, ma_h = locate.metrics(ctx, sim0, ctx.held), locate.metrics(ctx, after, ctx.held)
+    signals = {}
+    for s in ctx.measured:
+        if s not in mb_all:
+            continue
+        signals[s] = {"unit": CATALOGUE.signal(s).unit,
+                      "rmse_before": mb_all[s]["rmse"], "rmse_after": ma_all[s]["rmse"],
+                      "heldout_rmse_before": mb_h.get(s, {}).get("rmse"),
+                      "heldout_rmse_after": ma_h.get(s, {}).get("rmse"),
+                      "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
+                      "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"]}
+    affected = loc["mismatched_signals"]
+    if best is not None and best.signal:
+        affected = [best.signal]
+    energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
+    if best is not None and best.kind == "signal":
+        for d in energy.values():  # a sensor effect does not change the heat flows
+            d["simulated_after_kWh"] = d["simulated_before_kWh"]
+            if "error_before_pct" in d:
+                d["error_after_pct"] = d["error_before_pct"]
+    rep = {
+        "schema": SCHEMA,
+        "house": house,
+        "recording": ctx.rec.source,
+        "start": ctx.rec.start,
+        "samples": int(len(ctx.rec.time)),
+        "interval_s": float(np.median(np.diff(ctx.rec.time))),
+        "train_window_h": [float(ctx.rec.time[ctx.train].min() / 3600), float(ctx.rec.time[ctx.train].max() / 3600)],
+        "heldout_window_h": [float(ctx.rec.time[ctx.held].min() / 3600), float(ctx.rec.time[ctx.held].max() / 3600)]
+        if ctx.held.any() else None,
+        "warnings": warnings,
+        "verdict": verdict,
+        "effect": best.id if (best is not None and verdict == "missing_physics") else None,
+        "best_partial_candidate": best.id if (best is not None and verdict != "missing_physics") else None,
+        "component": (best.signal or best.component) if best is not None else None,
+        "parameters": best.public()["parameters"] if best is not None else {},
+        "size": best.effect.size(best.theta, ctx, best.rows) if best is not None else {},
+        "indistinguishable_from": twins,
+        "explained_share": explained,
+        "affected_signals": affected,
+        "affected_heldout_rmse_before": _rms(ctx, sim0, ctx.held, affected),
+        "affected_heldout_rmse_after": _rms(ctx, after, ctx.held, affected),
+        "cost": {"nominal_train": ctx.cost(sim0, ctx.train), "nominal_heldout": ctx.cost(sim0, ctx.held),
+                 "noise_floor": ctx.noise_cost()},
+        "signals": signals,
+        "energy": energy,
+        "locate": loc,
+        "candidates": [r.public() for r in results],
+        "search": terms,
+    }
+    rep["finding"] = finding(rep, ctx, best)
+    return _clean(rep)
+
+
+def _mode_phrase(rep, affected):
+    modes = [m for m in rep["locate"]["modes"] if m["time_share"] >= 0.02]
+    if not modes:
+        return None, {}
+    def conc(m):
+        return m["concentration"]
+    m = max(modes, key=conc)
+    return m["mode"], m["bias"]
+
+
+def finding(rep, ctx, best) -> str:
+    v = rep["verdict"]
+    aff = rep["affected_signals"]
+    if v == "no_missing_physics":
+        return ("No missing physics found: the twin, driven by the recorded commands, reproduces the "
+                f"recording within replay and sensor accuracy; no candidate beats the nominal model on "
+                f"held-out data (held-out cost {rep['cost']['nominal_heldout']:.3g}, "
+                f"sensor-noise floor {rep['cost']['noise_floor']:.3g}).")
+    mode, bias = _mode_phrase(rep, aff)
+    parts = []
+    shown = aff[:4]
+    if shown:
+        lower = [s for s in shown if bias.get(s, 0.0) < 0]
+        higher = [s for s in shown if bias.get(s, 0.0) >= 0]
+        desc = []
+        if lower:
+            desc.append(f"{', '.join(lower)} {'is' if len(lower) == 1 else 'are'} lower than simulated")
+        if higher:
+            desc.append(f"{', '.join(higher)} {'is' if len(higher) == 1 else 'are'} higher than simulated")
+        parts.append((f"During '{mode}' periods (where the error concentrates), " if mode else "")
+                     + " and ".join(desc))
+    unit = "K" if all(CATALOGUE.signal(s).unit == "degC" for s in aff) else "(mixed units)"
+    b, a = rep["affected_heldout_rmse_before"], rep["affected_heldout_rmse_after"]
+    if v == "missing_physics":
+        txt = (f"best explained by {best.effect.id} ({best.effect.summary(best.theta, ctx, best.rows)}"
+               + (f" on {best.signal}" if best.signal else "") + ")")
+        if b is not None and a is not None:
+            txt += f"; held-out RMSE of the affected signals {b:.2f} {unit} -> {a:.2f} {unit}"
+        if rep["indistinguishable_from"]:
+            txt += ("; the sensors cannot tell it apart from " + ", ".join(rep["indistinguishable_from"]))
+        parts.append(txt)
+    else:
+        txt = "unexplained mismatch: no catalogue candidate explains it"
+        if best is not None:
+            txt += (f" (best partial candidate {best.id} removes only {100 * rep['explained_share']:.0f} % of "
+                    f"the held-out excess error)")
+        terms = [t["term"] for s in rep["search"] for t in s["terms"]][:4]
+        if terms:
+            txt += "; residual terms proposed by the search: " + "; ".join(dict.fromkeys(terms))
+        parts.append(txt)
+    return "; ".join(parts) + "."
+
+
+def write_json(rep, out) -> Path:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    p = out / "report.json"
+    p.write_text(json.dumps(_clean(rep), indent=2))
+    return p
+
+
+def write(rep, out, ctx, nominal_rows, best, plots=True) -> None:
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    lines = [f"# twin diagnose: {rep['recording']}", "", rep["finding"], "", f"verdict: {rep['verdict']}"]
+    if rep["effect"]:
+        lines.append(f"effect: {rep['effect']} ({rep['component']})")
+        for k, p in rep["parameters"].items():
+            lines.append(f"  {k} = {p['value']:.4g} ± {p['stderr'] if p['stderr'] is not None else float('nan'):.2g} {p['unit']}")
+    lines += ["", "| signal | RMSE before | after | held-out before | after |", "|---|---|---|---|---|"]
+    for s, d in rep["signals"].items():
+        f = lambda x: "-" if x is None else f"{x:.3g}"  # noqa: E731
+        lines.append(f"| {s} | {f(d['rmse_before'])} | {f(d['rmse_after'])} | {f(d['heldout_rmse_before'])} | "
+                     f"{f(d['heldout_rmse_after'])} |")
+    lines += ["", "energy [kWh]:"]
+    for c, d in rep["energy"].items():
+        lines.append(f"  {c}: " + ", ".join(f"{k} {v:.3g}" for k, v in d.items() if isinstance(v, float)))
+    if rep["warnings"]:
+        lines += ["", "warnings:"] + [f"  - {w}" for w in rep["warnings"]]
+    (out / "report.md").write_text("\n".join(lines) + "\n")
+    if plots:
+        _plots(rep, out, ctx, nominal_rows, best)
+
+
+def _plots(rep, out, ctx, nominal_rows, best):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sig = (rep["affected_signals"] or sorted(rep["signals"], key=lambda s: -(rep["signals"][s]["rmse_before"] or 0)))[:3]
+    t = ctx.rec.time / 3600.0
+    after = best.sim if best is not None else None
+    wins = rep["locate"]["windows"][:2] or [{"start_h": t[0], "end_h": t[-1]}]
+    for wi, w in enumerate([{"start_h": t[0], "end_h": t[-1]}] + wins):
+        pad = 0 if wi == 0 else 3.0
+        sel = (t >= w["start_h"] - pad) & (t <= w["end_h"] + pad)
+        fig, ax = plt.subplots(len(sig), 1, figsize=(11, 2.8 * len(sig)), sharex=True, squeeze=False)
+        for a, s in zip(ax[:, 0], sig):
+            j = ctx.measured.index(s)
+            a.plot(t[sel], ctx.meas[sel, j], lw=0.8, label="measured", color="k")
+            a.plot(t[sel], nominal_rows[sel, ctx.cols[j]], lw=0.8, label="twin (nominal)")
+            if after is not None:
+                a.plot(t[sel], after[sel, j], lw=0.8, ls="--", label=f"twin + {best.id}")
+            a.set_ylabel(f"{s} [{CATALOGUE.signal(s).unit}]", fontsize=8)
+            a.legend(fontsize=7, ncol=3)
+        ax[-1, 0].set_xlabel("hours since recording start")
+        fig.suptitle("whole recording" if wi == 0 else f"located window {wi}: {w['start_h']:.1f}-{w['end_h']:.1f} h")
+        fig.tight_layout()
+        fig.savefig(out / ("overview.png" if wi == 0 else f"window_{wi}.png"), dpi=80)
+        plt.close(fig)

@@ -1,0 +1,90 @@
+"""Bad input is repaired with a warning or rejected with a clear message."""
+import numpy as np
+import pytest
+
+from plant.diagnose import recording_io, replay, synth
+from plant.errors import ConfigError, DataError
+
+
+@pytest.fixture(scope="module")
+def rec():
+    return synth.make("none", days=0.25, noise=False)
+
+
+def _write(tmp_path, rec, mutate=None, units=None, extra=None):
+    data = dict(rec.data)
+    t = rec.time.copy()
+    if extra:
+        data.update(extra)
+    csv = tmp_path / "lab.csv"
+    m = tmp_path / "columns.toml"
+    recording_io.write_csv(csv, t, data, m, start=rec.start, units=units)
+    if mutate:
+        lines = csv.read_text().splitlines()
+        csv.write_text("\n".join(mutate(lines)) + "\n")
+    return csv, m
+
+
+def test_round_trip(tmp_path, rec):
+    csv, m = _write(tmp_path, rec)
+    r = recording_io.load(csv, m)
+    assert r.start == rec.start and not r.warnings
+    assert np.allclose(r.data["chp.T_sup"], rec.data["chp.T_sup"], atol=1e-3)
+
+
+def test_unsorted_duplicate_gap_repaired(tmp_path, rec):
+    def mutate(lines):
+        body = lines[1:]
+        body[10], body[11] = body[11], body[10]          # unsorted
+        body.insert(20, body[20])                        # duplicate
+        del body[100:130]                                # a 30-min gap
+        return [lines[0]] + body
+    csv, m = _write(tmp_path, rec, mutate)
+    r = recording_io.load(csv, m)
+    text = " ".join(r.warnings)
+    assert "sorted" in text and "duplicate" in text and "gap" in text
+    assert np.all(np.diff(r.time) > 0)
+    assert not r.valid.all()
+
+
+def test_unknown_column_ignored_and_kelvin_converted(tmp_path, rec):
+    csv, m = _write(tmp_path, rec, units={"chp.T_sup": "K"},
+                    extra={"chp.T_sup": rec.data["chp.T_sup"] + 273.15})
+    with open(csv) as fh:
+        header = fh.readline().strip()
+    csv.write_text(csv.read_text().replace(header, header + ",junk", 1).replace("\n", ",1\n")
+                   .replace(header + ",junk,1", header + ",junk"))
+    r = recording_io.load(csv, m)
+    assert any("not in the mapping" in w for w in r.warnings)
+    assert abs(np.median(r.data["chp.T_sup"]) - np.median(rec.data["chp.T_sup"])) < 0.01
+
+
+def test_kelvin_labelled_celsius_rejected(tmp_path, rec):
+    csv, m = _write(tmp_path, rec, extra={"chp.T_sup": rec.data["chp.T_sup"] + 273.15})
+    with pytest.raises(DataError, match="looks like Kelvin"):
+        recording_io.load(csv, m)
+
+
+def test_unknown_unit_and_wrong_unit_rejected(tmp_path, rec):
+    csv, m = _write(tmp_path, rec, units={"chp.T_sup": "furlongs"})
+    with pytest.raises(ConfigError, match="unknown unit"):
+        recording_io.load(csv, m)
+    csv, m = _write(tmp_path, rec, units={"chp.T_sup": "kW"})
+    with pytest.raises(ConfigError, match="wrong unit"):
+        recording_io.load(csv, m)
+
+
+def test_missing_command_rejected_with_requirements(tmp_path, rec):
+    data = {k: v for k, v in rec.data.items() if k != "boiler.U_set"}
+    r = recording_io.Recording("x", rec.start, rec.time, data, [], None, {})
+    with pytest.raises(ConfigError, match="boiler.U_set") as exc:
+        replay.check(r)
+    assert "must contain" in str(exc.value)
+
+
+def test_requirements_cli(capsys):
+    from gateway.cli.main import main
+
+    assert main(["diagnose", "--requirements", "house1"]) == 0
+    out = capsys.readouterr().out
+    assert "chp.on" in out and "storage.T_sensor_10" in out
