@@ -5,6 +5,8 @@ Scenario file:
     at = 600            # s of simulated time
     device = "chp_neotower2"
     kind = "trip"       # trip | sensor_open | sensor_drift | silent | late | drop | bad_crc | clear
+                        # CAN (FMI-LS-BUS CAN terms, on the device's node): can_error_frame,
+                        # can_error_passive, can_bus_off, can_recover
     point = "t_supply"  # sensor faults
     delta = 5.0         # sensor_drift offset in the point's unit; late: delay in s
     code = 0            # trip: fault code (default: the map's trip code)
@@ -23,7 +25,8 @@ except ModuleNotFoundError:  # Python 3.10
 
 from plant.errors import ConfigError
 
-KINDS = ("trip", "sensor_open", "sensor_drift", "silent", "late", "drop", "bad_crc", "clear")
+KINDS = ("trip", "sensor_open", "sensor_drift", "silent", "late", "drop", "bad_crc", "clear",
+         "can_error_frame", "can_error_passive", "can_bus_off", "can_recover")
 
 
 @dataclass(frozen=True)
@@ -35,9 +38,15 @@ class Fault:
     delta: float = 0.0
     code: int = 0
 
-    def apply(self, devices: dict) -> None:
+    def apply(self, devices: dict, transports=()) -> None:
         dev = devices[self.device]
-        if self.kind == "trip":
+        if self.kind.startswith("can_"):
+            cans = [t for t in transports if getattr(t, "name", "") == "canopen"]
+            if not cans:
+                raise ConfigError(f"fault {self.kind} on {self.device}: no CANopen transport; add --can BUS")
+            for t in cans:
+                t.inject(self.kind[4:], node_id=dev.map.canopen.node_id)
+        elif self.kind == "trip":
             dev.inject_trip(self.code or None)
         elif self.kind in ("sensor_open", "sensor_drift"):
             dev.inject_sensor_fault(self.point, self.kind.split("_")[1], self.delta)

@@ -93,7 +93,7 @@ class Runtime:
             t = self.house.t
             values = self.house.values()
         while self.pending_faults and self.pending_faults[0].at <= t + 1e-9:
-            self.pending_faults.pop(0).apply(self.devices)
+            self.pending_faults.pop(0).apply(self.devices, self.transports)
         for d in self.devices.values():
             d.tick(t)
         for tr in self.transports:

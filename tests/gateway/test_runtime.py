@@ -125,3 +125,40 @@ def test_runtime_serves_canopen_nodes_with_live_plant_values(tmp_path):
     finally:
         master.disconnect()
         rt.stop()
+
+
+def test_scheduled_can_bus_off_silences_the_node_and_is_recorded(tmp_path):
+    import uuid
+
+    import can
+
+    from gateway.transports.can_bus import open_bus
+
+    bus_spec = f"virtual:bo-{uuid.uuid4().hex[:8]}"
+    rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0),
+                 record=tmp_path / "rec")
+    rt.add_canopen(bus_spec)
+    node_id = rt.devices["chp_neotower2"].map.canopen.node_id
+    rt.schedule([Fault(5.0, "chp_neotower2", "can_bus_off"), Fault(10.0, "chp_neotower2", "can_recover")])
+    rt.start()
+    listener = open_bus(bus_spec)
+    heartbeats = {}  # plant second -> heartbeats heard after that step
+    try:
+        for _ in range(16):
+            rt.clock.step(1)
+            n, t_end = 0, time.time() + 0.15
+            while time.time() < t_end:
+                msg = listener.recv(timeout=0.02)
+                if msg is not None and not msg.is_error_frame and msg.arbitration_id == 0x700 + node_id:
+                    n += 1
+            heartbeats[round(rt.house.t)] = n
+    finally:
+        listener.shutdown()
+        rt.stop()
+    rec = read_recording(tmp_path / "rec")
+    text = " ".join(f"{e['kind']} {e['detail']}" for e in rec.events)
+    assert "bus_off" in text and "recover" in text
+    # heartbeats run on plant time (1 s period): heard before the fault, silent while bus-off
+    assert sum(heartbeats[t] for t in (2, 3, 4)) >= 2, heartbeats
+    assert sum(heartbeats[t] for t in (6, 7, 8, 9)) == 0, heartbeats
+    assert sum(heartbeats[t] for t in range(12, 17)) >= 2, heartbeats
