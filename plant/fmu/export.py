@@ -9,13 +9,21 @@ calls `pythonfmu.builder.FmuBuilder.build_FMU`, which zips that script, the hous
 resource), pythonfmu's own Python files and its prebuilt C++ bridge (binaries/linux64,
 binaries/win64) into the .fmu.
 
-Running the FMU needs a Python (the one the bridge finds: a Python host such as fmpy runs it in
-its own interpreter) WITH THIS PROJECT INSTALLED (`pip install -e .` of this repo, plus
-pythonfmu is not needed at run time: the FMU carries its own copy).  The slave imports `plant`
-at run time, so the numba cache of the installed package is reused and the FMU runs the exact
-same compiled kernel as `twin simulate`.  It is therefore NOT a self-contained FMU: hand it to
-tools on machines where this twin is installed.  Hosts that are not Python processes must make
-libpython3.x visible to the bridge (e.g. LD_PRELOAD=.../libpython3.11.so on Linux).
+Running the FMU needs a Python WITH THIS PROJECT INSTALLED (`pip install -e .` of this repo;
+pythonfmu itself is not needed at run time, the FMU carries its own copy).  pythonfmu's bridge
+runs the slave in the host's interpreter when the host is a Python process (fmpy), else it
+starts one.  The slave imports `plant` at run time, so the numba cache of the installed package
+is reused and the FMU runs the exact same compiled kernel as `twin simulate`.  It is therefore
+NOT a self-contained FMU: hand it to tools on machines where this twin is installed.  Hosts that
+are not Python processes must make libpython3.x visible to the bridge (the bridge does not link
+it; e.g. LD_PRELOAD=.../libpython3.11.so on Linux) - untested here.
+
+Known problem (pythonfmu 0.7.0 bridge, Linux): a Python host that has NOT imported the twin
+itself before loading the FMU may abort at interpreter exit, after all results are produced
+("corrupted double-linked list" in scipy's libgfortran fini; measured in about 1 of 4 runs of a
+bare `fmpy simulate house1.fmu`).  Workarounds that removed it in every measured run: import
+`plant.house` in the host before loading the FMU (the tests do), or set OPENBLAS_NUM_THREADS=1
+in the environment.
 
 Variables (FMI names keep the catalogue's dotted names; variableNamingConvention="structured"):
   inputs      the catalogue's input signals (chp.on, chp.y_set, boiler.U_set, dhw_pump.on,
