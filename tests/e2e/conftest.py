@@ -3,8 +3,9 @@
 The plant and the controller alternate deterministically: one controller scan (it reads the
 registers = the plant at time t and writes its commands), then SCAN plant steps of 1 s. The
 built-in controller does the same with `controller.period = SCAN`: it scans at t = 0, SCAN, ...
-on the sensor values at t and holds its outputs for the period, so both runs see the same
-alignment and differ only by what the bus adds (0.1 K register resolution).
+on the sensor values at t and holds its outputs for the period, and it sees the sensors at the
+registers' 0.1 K resolution (`controller.sensor_resolution`), so both runs make the same decisions
+and differ only by what the bus transports (heat per generator within 0.4 %).
 """
 from __future__ import annotations
 
