@@ -31,6 +31,11 @@ def main():
     print(rep["finding"])
     print(f"verdict {rep['verdict']} effect {rep['effect']} parameters "
           + ", ".join(f"{k}={v['value']:.4g}" for k, v in rep["parameters"].items()))
+    e = rep["energy_heldout"].get("chp", {})
+    if e:
+        print(f"CHP heat error (twin chp.Q_flow vs the recording's CHP heat meter, held-out window): "
+              f"{e['error_before_pct']:+.2f} % -> {e.get('error_after_pct', float('nan')):+.2f} %")
+    print("size: " + ", ".join(f"{k}={v:.4g}" for k, v in rep["size"].items()))
     print("stages [s]: " + ", ".join(f"{k} {v:.1f}" for k, v in rep["timing_s"].items()))
     print(f"RESULT diagnose_seconds={wall:.1f}")
 

@@ -18,6 +18,7 @@ MODES = {
     "heating_on": "heating pump on",
     "dhw_on": "DHW charging on",
     "chp_off_heating_on": "CHP off and heating pump on",
+    "chp_on_boiler_on": "CHP and boiler on",
 }
 
 
@@ -59,7 +60,8 @@ class Context:
         heating_on = cmd["mixer.m_flow_set"] > 0.005
         dhw_on = cmd["dhw_pump.on"] > 0.5
         flags = {"chp_on": chp_on, "chp_off": ~chp_on, "boiler_on": boiler_on, "heating_on": heating_on,
-                 "dhw_on": dhw_on, "chp_off_heating_on": (~chp_on) & heating_on}
+                 "dhw_on": dhw_on, "chp_off_heating_on": (~chp_on) & heating_on,
+                 "chp_on_boiler_on": chp_on & boiler_on}
         ctx = cls(rec, measured, train, held, meas, ok, scale, noise, flags)
         ctx.cols = np.array([CATALOGUE.index(s) for s in measured])
         ctx.t_split = t_split

@@ -26,6 +26,7 @@ from scipy.optimize import minimize_scalar
 
 MIN_GAIN = 0.10
 EXPLAIN = 0.60
+PARSIMONY = 0.02
 
 
 @dataclass
@@ -47,6 +48,7 @@ class Result:
     sim: np.ndarray | None = None      # [n, n_measured] fitted simulation of the measured signals
     rows: np.ndarray | None = None     # full catalogue rows (simulate kind) for energies/plots
     effect: object = None
+    k: int = 1                         # number of fitted parameters (BIC)
 
     def public(self) -> dict:
         return {"id": self.id, "component": self.component if self.signal is None else self.signal,
@@ -105,24 +107,53 @@ def _stderr(f, p, theta, J, n_eff):
 
 
 def fit_simulate(effect, ctx, replayer, nominal_cost) -> Result:
-    p = effect.params[0]
+    """1 fitted parameter: grid + Brent. Several (effect.fitted(ctx)): coordinate descent - each
+    parameter by grid + Brent with the others held, then a second, local pass (bracket +-15 % of
+    the range) over all of them; the parameters not fitted stay nominal."""
+    params = effect.params
+    free = effect.fitted(ctx)
     t_end = float(ctx.rec.time[ctx.train].max())
     cache = {}
 
-    def f(v):
-        key = round(float(v), 12)
+    def F(theta):
+        key = tuple(round(float(v), 12) for v in theta)
         if key not in cache:
-            rows = replayer.run(effect.overrides([v]), until=t_end)
+            rows = replayer.run(effect.overrides(list(theta)), until=t_end)
             cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
         return cache[key]
 
-    theta, J, nfev = _scalar_search(f, p)
-    se = _stderr(f, p, theta, J, ctx.n_eff(ctx.train))
-    rows = replayer.run(effect.overrides([theta]))
+    theta = [p.nominal for p in params]
+    J = math.nan
+
+    def along(i):
+        def f(v):
+            th = list(theta)
+            th[i] = v
+            return F(th)
+        return f
+
+    for i in free:
+        theta[i], J, _ = _scalar_search(along(i), params[i])
+    if len(free) > 1:
+        for i in free:
+            p = params[i]
+            lo, hi = _to_u(p, p.lo), _to_u(p, p.hi)
+            u = _to_u(p, theta[i])
+            d = 0.15 * (hi - lo)
+            f = along(i)
+            res = minimize_scalar(lambda x: f(_from_u(p, x)), bounds=(max(lo, u - d), min(hi, u + d)),
+                                  method="bounded", options={"xatol": (hi - lo) * 2e-3, "maxiter": 8})
+            if res.fun < J:
+                theta[i], J = _from_u(p, res.x), float(res.fun)
+    n_eff = ctx.n_eff(ctx.train)
+    se = [_stderr(along(i), params[i], theta[i], J, n_eff) if i in free else math.nan
+          for i in range(len(params))]
+    rows = replayer.run(effect.overrides(theta))
     sim = rows[:, ctx.cols]
-    r = Result(effect.id, effect.component, effect.kind, True, theta=[theta], stderr=[se],
+    r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta), stderr=se,
                train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect)
+    r.k = len(free)
     return r
 
 
@@ -180,7 +211,7 @@ def judge(results, ctx, nominal_train, nominal_held) -> None:
         if not r.plausible or r.sim is None:
             continue
         r.held_gain = 1.0 - r.held_cost / nominal_held if nominal_held > 0 else 0.0
-        r.bic = bic(r.train_cost, n_eff, len(r.theta))
+        r.bic = bic(r.train_cost, n_eff, r.k)
         if r.held_gain < MIN_GAIN:
             r.reason = (f"held-out cost {r.held_cost:.4g} vs nominal {nominal_held:.4g}: "
                         f"gain {r.held_gain * 100:.1f} % < {MIN_GAIN * 100:.0f} %; rejected")
@@ -194,26 +225,41 @@ def judge(results, ctx, nominal_train, nominal_held) -> None:
 def select(results, ctx, nominal_sim, affected):
     """-> (verdict, best Result or None, indistinguishable ids, explained share).
 
-    affected: signals with a persistent nominal mismatch (locate.mismatched_signals); the
-    explained share is measured on them (all signals when there are none)."""
-    nominal_held = ctx.cost(nominal_sim, ctx.held)
+    affected: signals with a mismatch beyond replay and sensor accuracy
+    (locate.mismatched_signals); the explained share is measured on them. Without any such
+    signal there is nothing to explain: no_missing_physics, even if a candidate trims the
+    replay's timing noise by more than MIN_GAIN. Parsimony: a candidate with fewer fitted
+    parameters whose held-out cost is within PARSIMONY of the best replaces it."""
     acc = sorted([r for r in results if r.accepted], key=lambda r: r.held_cost)
+    if not affected:
+        return "no_missing_physics", None, [], 0.0
     if not acc:
-        return ("unexplained_mismatch" if affected else "no_missing_physics"), None, [], 0.0
+        return "unexplained_mismatch", None, [], 0.0
     best = acc[0]
-    idx = [ctx.measured.index(s) for s in affected] or list(range(len(ctx.measured)))
-    mse0 = ctx.per_signal_mse(nominal_sim, ctx.held)[idx] / ctx.scale[idx] ** 2
-    mse1 = ctx.per_signal_mse(best.sim, ctx.held)[idx] / ctx.scale[idx] ** 2
-    floor = (ctx.noise[idx] / ctx.scale[idx]) ** 2
-    explained = float(np.nansum(mse0 - mse1) / max(np.nansum(mse0 - floor), 1e-12))
-    twins = []
     for r in acc[1:]:
+        if r.k < best.k and r.held_cost <= (1.0 + PARSIMONY) * acc[0].held_cost:
+            best = r
+    idx = [ctx.measured.index(s) for s in affected]
+    explained = explained_share(ctx, nominal_sim, best.sim, idx)
+    twins = []
+    for r in acc:
+        if r is best:
+            continue
         d = _sim_distance(ctx, best.sim, r.sim)
         if r.held_cost <= 1.25 * best.held_cost + 0.02 and d <= max(best.held_cost, 0.02):
             twins.append(r.id)
     if explained < EXPLAIN:
         return "unexplained_mismatch", best, twins, explained
     return "missing_physics", best, twins, explained
+
+
+def explained_share(ctx, nominal_sim, sim, idx) -> float:
+    """Share of the nominal held-out excess (above the sensor-noise floor) of the signals idx
+    that the fitted simulation removes."""
+    mse0 = ctx.per_signal_mse(nominal_sim, ctx.held)[idx] / ctx.scale[idx] ** 2
+    mse1 = ctx.per_signal_mse(sim, ctx.held)[idx] / ctx.scale[idx] ** 2
+    floor = (ctx.noise[idx] / ctx.scale[idx]) ** 2
+    return float(np.nansum(mse0 - mse1) / max(np.nansum(mse0 - floor), 1e-12))
 
 
 def _sim_distance(ctx, a, b):

@@ -52,11 +52,13 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     if best is not None and best.signal:
         affected = [best.signal]
     energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
+    energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
     if best is not None and best.kind == "signal":
-        for d in energy.values():  # a sensor effect does not change the heat flows
-            d["simulated_after_kWh"] = d["simulated_before_kWh"]
-            if "error_before_pct" in d:
-                d["error_after_pct"] = d["error_before_pct"]
+        for e in (energy, energy_held):
+            for d in e.values():  # a sensor effect does not change the heat flows
+                d["simulated_after_kWh"] = d["simulated_before_kWh"]
+                if "error_before_pct" in d:
+                    d["error_after_pct"] = d["error_before_pct"]
     rep = {
         "schema": SCHEMA,
         "house": house,
@@ -83,6 +85,7 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
                  "noise_floor": ctx.noise_cost()},
         "signals": signals,
         "energy": energy,
+        "energy_heldout": energy_held,
         "locate": loc,
         "candidates": [r.public() for r in results],
         "search": terms,

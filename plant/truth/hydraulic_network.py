@@ -9,7 +9,8 @@ Topology (three pressure nodes; R = return header is the pressure reference, p_R
     storage             R -> S       tank + connection pipes, k_storage            both ways
     chp                 R -> J       CHP heat exchanger + pipes k_chp, internal    both ways
                                      pump (curve H0 n^2 - a m|m|), NO check valve  (no check valve)
-    link                R -> J       boiler return pipe, k_link, check valve       R -> J only
+    link                R -> J       boiler return pipe with the boiler pump, k_link R -> J only
+                                     (+ stopped pump and boiler when idle), check valve
     chp_line            J -> S       CHP supply line into the header, k_chp_line,  J -> S only
                                      check valve
     boiler              J -> S       speed-controlled boiler pump (flow source)    J -> S only
@@ -52,7 +53,7 @@ from ..component import param
 class NetworkParams:
     enabled: bool = param(True, "1", "pressure-driven network; false = the ideal switch (no forced flow)")
     k_storage: float = param(20000.0, "Pa/(kg/s)2", "storage and its connection pipes (R <-> S)", 1.0, 1e9)
-    k_chp: float = param(12000.0, "Pa/(kg/s)2", "CHP branch: heat exchanger, pipes, stopped pump", 1.0, 1e9)
+    k_chp: float = param(70000.0, "Pa/(kg/s)2", "CHP branch: heat exchanger, pipes, stopped pump", 1.0, 1e9)
     k_link: float = param(3500.0, "Pa/(kg/s)2", "boiler return pipe from R to the coupling point J", 1.0, 1e9)
     k_chp_line: float = param(2000.0, "Pa/(kg/s)2", "line from J into the supply header", 1.0, 1e9)
     m0: float = param(1e-4, "kg/s", "laminar core of the branch law (numerical regularisation)", 1e-8, 1e-2)
@@ -112,16 +113,16 @@ def pump_speed(m, dp_against, H0, a, k):
 
 
 @njit(cache=True)
-def flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol):
+def flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol, k_link):
     """Branch flows at pressures (pS, pJ), p_R = 0; fills sol; returns (F_S, F_J, dFS/dpS,
-    dFS/dpJ, dFJ/dpS, dFJ/dpJ) without the flow sources."""
+    dFS/dpJ, dFJ/dpS, dFJ/dpJ) without the flow sources. k_link: the link's resistance now."""
     m0 = p[M0]
     m_st, d_st = branch(0.0 - pS, p[K_STORAGE], m0)
     if chp_fixed:
         m_c, d_c = m_chp_fixed, 0.0
     else:
         m_c, d_c = branch(0.0 - pJ + p[CHP_PUMP_H0] * n_chp * n_chp, p[K_CHP], m0)
-    m_l, d_l = check_branch(0.0 - pJ, p[K_LINK], m0)
+    m_l, d_l = check_branch(0.0 - pJ, k_link, m0)
     m_js, d_js = check_branch(pJ - pS, p[K_CHP_LINE], m0)
     sol[X_PS] = pS
     sol[X_PJ] = pJ
@@ -145,11 +146,14 @@ def solve(p, m_boiler, m_consumers, chp_fixed, m_chp_fixed, n_chp, pS0, pJ0, sol
     branch either pressure-driven with its pump at relative speed n_chp (chp_fixed False) or a
     fixed flow m_chp_fixed. Node balances: S: storage + chp_line + boiler - consumers = 0;
     J: chp + link - chp_line - boiler = 0. Fills sol (see X_*); returns the residual [kg/s]."""
+    # The boiler's pump sits in its return pipe (the link): stopped, it and the boiler's heat
+    # exchanger add their resistance, so an idle-side short circuit passes mainly the idle CHP.
+    k_link = p[K_LINK] + (p[BOILER_PUMP_A] + p[BOILER_K] if m_boiler <= 0.0 else 0.0)
     pS, pJ = pS0, pJ0
     res = 1e300
     it = 0
     for it in range(60):
-        F_S, F_J, a, b, c, d = flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol)
+        F_S, F_J, a, b, c, d = flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol, k_link)
         F_S += m_boiler - m_consumers
         F_J -= m_boiler
         res = abs(F_S) + abs(F_J)
@@ -165,7 +169,7 @@ def solve(p, m_boiler, m_consumers, chp_fixed, m_chp_fixed, n_chp, pS0, pJ0, sol
         lam = 1.0
         for _ in range(40):
             tS, tJ, _a, _b, _c, _d = flows(pS + lam * dS, pJ + lam * dJ, p, chp_fixed, m_chp_fixed,
-                                           n_chp, sol)
+                                           n_chp, sol, k_link)
             tS += m_boiler - m_consumers
             tJ -= m_boiler
             if abs(tS) + abs(tJ) < res:
@@ -173,7 +177,7 @@ def solve(p, m_boiler, m_consumers, chp_fixed, m_chp_fixed, n_chp, pS0, pJ0, sol
             lam *= 0.5
         pS += lam * dS
         pJ += lam * dJ
-    F_S, F_J, a, b, c, d = flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol)
+    F_S, F_J, a, b, c, d = flows(pS, pJ, p, chp_fixed, m_chp_fixed, n_chp, sol, k_link)
     res = abs(F_S + m_boiler - m_consumers) + abs(F_J - m_boiler)
     sol[X_ITER] = it + 1
     sol[X_RES] = res

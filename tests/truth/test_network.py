@@ -37,7 +37,7 @@ def test_running_boiler_sucks_flow_through_the_chp():
     assert abs(idle[net.X_M_CHP]) < 1e-6  # nothing runs: no flow
     _, s = _solve(0.25, 0.1)
     assert s[net.X_PJ] < 0.0 < s[net.X_M_CHP]  # J below the return header: suction
-    assert s[net.X_M_CHP] > 0.05
+    assert s[net.X_M_CHP] > 0.04  # well above what the CHP pump would deliver for itself
 
 
 def test_pump_speed_follows_the_affinity_law():

@@ -54,6 +54,11 @@ class Effect:
     def apply(self, t: np.ndarray, y: np.ndarray, theta) -> np.ndarray:
         raise NotImplementedError
 
+    def fitted(self, ctx) -> list[int]:
+        """Indices of the parameters the recording can identify (the others stay at their
+        nominal value); default: all. Counted as the candidate's k in the BIC."""
+        return list(range(len(self.params)))
+
     def plausible(self, ctx) -> tuple[bool, str]:
         """Whether the recording can show this effect at all (ctx: diagnose.Context)."""
         return True, ""

@@ -8,19 +8,38 @@ from .base import Effect, Param, register
 
 I_PRIM = CATALOGUE.index("mixer.m_flow_primary")
 I_BFLOW = CATALOGUE.index("boiler.m_flow")
+I_CFLOW = CATALOGUE.index("chp.m_flow")
 
 
 @register
 class IdleGeneratorFlow(Effect):
+    """A CHP branch open to the generator header (no check valve, common coupling point).
+
+    Two symptoms of the one cause, fitted jointly: while the CHP is off, a share of the heating
+    circuit's primary flow short-circuits through it (connections.idle_flow_chp, which the twin
+    applies only while the CHP is commanded off); while it runs, the boiler pump sucks part of
+    its flow through it (connections.pump_coupling_chp), which keeps its outlet below the set-
+    point. Fitting only the first knob would let it imitate the second (the idle share would be
+    overestimated); the second is fitted only when the recording has CHP-and-boiler periods.
+    The named size is the idle flow; the suction is reported next to it.
+    """
     id = "idle_generator_flow"
     component = "chp"
     kind = "simulate"
-    params = (Param("idle_flow_chp", 0.0, 0.8, 0.0, "1 (share of the heating primary flow)"),)
-    description = ("part of the heating circuit's primary flow short-circuits through the idle CHP "
-                   "via the coupling point (connections.idle_flow_chp)")
+    params = (Param("idle_flow_chp", 0.0, 0.8, 0.0, "1 (share of the heating primary flow, CHP off)"),
+              Param("pump_coupling_chp", 0.0, 0.8, 0.0, "1 (share of the boiler flow, through the CHP)"))
+    description = ("the CHP branch is open to the header: part of the heating circuit's primary flow "
+                   "short-circuits through the idle CHP (connections.idle_flow_chp) and, jointly, the "
+                   "boiler pump pushes part of its flow through the CHP (connections.pump_coupling_chp)")
 
     def overrides(self, theta):
-        return {"connections.idle_flow_chp": float(theta[0])}
+        ov = {"connections.idle_flow_chp": float(theta[0])}
+        if len(theta) > 1:
+            ov["connections.pump_coupling_chp"] = float(theta[1])
+        return ov
+
+    def fitted(self, ctx):
+        return [0, 1] if ctx.mode_share("chp_on_boiler_on") >= 0.02 else [0]
 
     def plausible(self, ctx):
         share = ctx.mode_share("chp_off_heating_on")
@@ -28,14 +47,30 @@ class IdleGeneratorFlow(Effect):
             return False, "the recording has (almost) no period with the CHP off and the heating pump on"
         return True, ""
 
+    @staticmethod
+    def _idle_mask(ctx):
+        """CHP off, heating pump on and, when there are such samples, the boiler off (the
+        definition of the truth's effect size in plant/truth/recording.py)."""
+        sel = ctx.mode_mask("chp_off_heating_on")
+        sel2 = sel & ~ctx.mode_mask("boiler_on")
+        return sel2 if sel2.sum() >= 10 else sel
+
     def _flow(self, theta, ctx, sim):
         if sim is None:
             return None, None
-        sel = ctx.mode_mask("chp_off_heating_on")
+        sel = self._idle_mask(ctx)[: len(sim)]
         prim = sim[:, I_PRIM][sel]
         if prim.size == 0:
             return None, None
         return float(theta[0] * prim.mean()), float(prim.mean())
+
+    def _suction(self, theta, ctx, sim):
+        if sim is None or len(theta) < 2:
+            return None
+        sel = ctx.mode_mask("chp_on_boiler_on")[: len(sim)]
+        if sel.sum() < 10:
+            return None
+        return float(sim[:, I_CFLOW][sel].mean()), float(theta[1] * sim[:, I_BFLOW][sel].mean())
 
     def size(self, theta, ctx, sim=None):
         m, prim = self._flow(theta, ctx, sim)
@@ -43,14 +78,28 @@ class IdleGeneratorFlow(Effect):
         if m is not None:
             out["flow_kg_s"] = m
             out["heating_primary_flow_kg_s"] = prim
+        if len(theta) > 1:
+            out["share_of_boiler_flow_through_running_chp"] = float(theta[1])
+            su = self._suction(theta, ctx, sim)
+            if su is not None:
+                out["chp_flow_while_chp_and_boiler_run_kg_s"] = su[0]
+                out["boiler_flow_pushed_through_chp_kg_s"] = su[1]
         return out
 
     def summary(self, theta, ctx, sim=None):
         m, prim = self._flow(theta, ctx, sim)
         if m is None:
-            return f"{theta[0] * 100:.0f} % of the heating primary flow through the idle CHP"
-        return (f"a flow of {m:.3f} kg/s through the idle CHP, {theta[0] * 100:.0f} % of the heating "
-                f"primary flow (mean {prim:.3f} kg/s while the CHP is off and the heating pump on)")
+            txt = f"{theta[0] * 100:.0f} % of the heating primary flow through the idle CHP"
+        else:
+            txt = (f"a flow of {m:.3f} kg/s through the idle CHP, {theta[0] * 100:.0f} % of the heating "
+                   f"primary flow (mean {prim:.3f} kg/s while the CHP is off and the heating pump on)")
+        if len(theta) > 1 and theta[1] > 0:
+            su = self._suction(theta, ctx, sim)
+            txt += (f"; jointly fitted: the boiler pump pushes {theta[1] * 100:.0f} % of its flow through "
+                    "the running CHP")
+            if su is not None:
+                txt += f" (CHP flow {su[0]:.3f} kg/s while CHP and boiler run)"
+        return txt
 
 
 @register
