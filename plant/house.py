@@ -52,13 +52,19 @@ class Snapshot:
 
 
 def load_house(name_or_path: str | Path = "house1", start: str | None = None,
-               controller: str = "rule_based", overrides: dict | None = None) -> "House":
+               controller: str = "rule_based", overrides: dict | None = None) -> "House | FmuHouse":
     """Assemble a house from its file; every problem is reported before the first step.
 
     overrides: {"section.key": value}, e.g. {"storage.UA_loss": 25.0,
     "connections.idle_flow_chp": 0.2}, validated like the file's own values.
+    A house file with [house] topology = "fmu" gives an FmuHouse (plant/fmu/house.py).
     """
-    return House(housefile.load(name_or_path, overrides), start=start, controller=controller)
+    spec = housefile.load(name_or_path, overrides)
+    if isinstance(spec, housefile.FmuHouseSpec):
+        from .fmu.house import FmuHouse
+
+        return FmuHouse(spec, start=start, controller=controller)
+    return House(spec, start=start, controller=controller)
 
 
 class House:

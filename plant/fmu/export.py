@@ -274,6 +274,9 @@ def export_house_fmu(house: str | Path = "house1", out: str | Path | None = None
     from .. import housefile
 
     spec = housefile.load(house)  # ConfigError naming the file / the shipped houses
+    if isinstance(spec, housefile.FmuHouseSpec):
+        raise ConfigError(f"{spec.path}: the plant of this house is already an FMU ({spec.fmu}); "
+                          "export-fmu exports native houses")
     if spec.storage_fmu is not None:
         raise ConfigError(f"{spec.path}: the heating storage of this house is an FMU ([storage] fmu); "
                           "exporting such a house as an FMU is not supported - export a house with "

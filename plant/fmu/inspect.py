@@ -128,7 +128,8 @@ def format_info(info: FmuInfo, causalities: tuple[str, ...] | None = None) -> st
     lines.append(f"this host   {info.this_platform}: " + ("binary present, can run" if problem is None
                                                           else "CANNOT RUN: " + problem))
     if not info.cosimulation:
-        lines.append("note        no co-simulation interface: the twin can only run co-simulation FMUs")
+        lines.append("note        model exchange only: the twin integrates it with fmpy's solvers "
+                     "(FmuModelExchange; solver = \"CVode\" in a house file)")
     rows = [v for v in info.variables if causalities is None or v.causality in causalities]
     rows.sort(key=lambda v: CAUSALITY_ORDER.get(v.causality, 9))
     lines.append(f"variables   {len(rows)} shown of {len(info.variables)}")
