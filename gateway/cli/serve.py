@@ -67,6 +67,12 @@ def serve(args) -> int:
     clock = LockStepClock(args.dt) if args.lock_step else PacedClock(args.speed, args.dt)
     rt = Runtime(house, clock=clock, record=args.record, read_only=args.read_only,
                  devices=args.devices.split(",") if args.devices else None)
+    from gateway.maps.lint import lint_all
+
+    maps = {k: d.map for k, d in rt.devices.items()}
+    for problem in lint_all(maps, house.catalogue, house.name):
+        if problem.level == "error":  # e.g. a point bound to a signal an FMU plant does not provide
+            print(f"warning: {problem.text}; reading that point answers exception 04", file=sys.stderr)
     faults = [parse_cli(f, rt.devices) for f in args.fault]
     if args.scenario:
         faults += load_scenario(args.scenario, rt.devices)
