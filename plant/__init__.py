@@ -12,9 +12,14 @@ from pathlib import Path
 _HERE = Path(__file__).parent
 
 
+# the folders whose modules hold compiled kernels (or call them); others do not affect the cache
+_KERNEL_SOURCES = ("*.py", "components/*.py", "controllers/*.py", "hydraulics/*.py", "truth/*.py")
+
+
 def _source_hash() -> str:
     h = hashlib.sha256()
-    for path in sorted([*_HERE.rglob("*.py"), _HERE.parent / "profiles" / "loaders.py"]):
+    paths = [p for pattern in _KERNEL_SOURCES for p in _HERE.glob(pattern)]
+    for path in sorted([*paths, _HERE.parent / "profiles" / "loaders.py"]):
         if path.exists():
             h.update(path.name.encode())
             h.update(path.read_bytes())
