@@ -4,8 +4,8 @@ diagnosed effect) and ends with RESULT lines.
 
 Cases: nominal (the ideal twin + noise: must give no_missing_physics); storage_heat_loss,
 sensor_lag, storage_mixing (truth on the ideal switch with a 40-layer storage, i.e. single
-effects); concealed_idle_flow (the pressure-driven header: idle-CHP flow, flow through the idle
-boiler's return link and boiler suction through the running CHP; expected: idle_generator_flow).
+effects); concealed_idle_flow (the pressure-driven header: the heating deficit short-circuits
+through the idle CHP and overruns the running CHP's pump; expected: idle_generator_flow).
 `python benchmarks/diagnose_cases.py [case ...]`, `--days 3` for a quicker run.
 """
 import sys

@@ -81,7 +81,7 @@ class Connections:
     storage_soc_Tmax: float = 80.0
     dhw_soc_T0: float = 15.0
     dhw_soc_Tmax: float = 80.0
-    idle_flow_chp: float = 0.0      # share of the heating primary flow forced through the CHP while it is off
+    idle_flow_chp: float = 0.0      # share of the consumers' flow deficit (vs the boiler) through the CHP
     pump_coupling_chp: float = 0.0  # share of the boiler flow forced through the CHP
 
 

@@ -166,8 +166,8 @@ def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
         h, x_m, p_m, s[I_MIX_TSET], s[I_MIX_MSET], T_sh, x_r[0])
     m_b, T_b, Pel_b, Pf_b, Ph_b, mode_b = boiler.step(
         t, h, x_b, p_b, tabs[3], tabs[4], tabs[5], tabs[6], tabs[7], s[I_BOILER_U], 0.0, T_rh)
-    ext_chp = prescribed.forced_generator_flows(m_prim, m_b, p_sys[SYS_IDLE_FLOW_CHP],
-                                                p_sys[SYS_PUMP_COUPLING_CHP], s[I_CHP_ON])
+    ext_chp = prescribed.forced_generator_flows(m_prim + m_dp, m_b, p_sys[SYS_IDLE_FLOW_CHP],
+                                                p_sys[SYS_PUMP_COUPLING_CHP])
     m_c, T_c, Pel_c, Pf_c, Ph_c, mode_c = chp.step(
         t, h, x_chp, p_chp, tabs[0], tabs[1], tabs[2], s[I_CHP_ON], s[I_CHP_YSET], ext_chp, T_rh)
 

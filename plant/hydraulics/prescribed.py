@@ -7,19 +7,18 @@ the storage top and replaced at the bottom. No flow is ever forced through an id
 
 Interface (shared with a pressure-driven network that may replace this module):
     split(m_generators, m_demand) -> (m_charge, m_discharge)
-    forced_generator_flows(m_heating, m_boiler, idle_share, coupling_share, chp_on) -> m_ext_chp
+    forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share) -> m_ext_chp
 
 The ideal switch forces no flow through a generator (both shares 0, as the original). Two
 lumped parameters let the same switch carry the effects a pressure-driven header produces
-(used by the fit to test hypotheses): a share of the heating circuit's primary flow short-
-circuiting through the CHP ("idle generator flow"), and a share of the boiler's flow pushed
-through the CHP ("pump coupling"). The generator takes max(own pump flow, forced flow).
-
-The idle share acts only while the CHP is commanded off (chp_on < 0.5): it stands for the header
-flow through an idle unit, and must not also imitate the boiler's suction through the running
-CHP (that is the coupling share; `twin diagnose` fits the two jointly). The coupling share acts
-whenever the boiler pump runs. With both shares 0 (the default) the result is 0, bit-identical
-to the ideal switch; the forced flow only changes the CHP's flow, so the ledger stays exact.
+(used by the fit to test hypotheses). Idle-generator flow: when the consumers (heating circuit
+primary + DHW charging) draw more than the boiler delivers, the deficit returns from the return
+to the supply header through every open path in parallel — the storage and the CHP branch, which
+has no check valve; `idle_share` is the CHP's part of that deficit. Pump coupling: a share of
+the boiler's own flow pushed through the CHP (suction on a shared header). The CHP takes
+max(own pump flow, forced flow), so a running CHP is pushed past its own pump only when the
+forced flow is larger. With both shares 0 (the default) the result is 0, bit-identical to the
+ideal switch; the forced flow only changes the CHP's flow, so the ledger stays exact.
 """
 from numba import njit
 
@@ -34,7 +33,7 @@ def split(m_generators, m_demand):
 
 
 @njit(cache=True)
-def forced_generator_flows(m_heating, m_boiler, idle_share, coupling_share, chp_on):
-    """Flow [kg/s] the network pushes through the CHP (idle share only while chp_on < 0.5)."""
-    idle = idle_share * m_heating if chp_on < 0.5 else 0.0
-    return idle + coupling_share * m_boiler
+def forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share):
+    """Flow [kg/s] the network pushes through the CHP."""
+    deficit = m_demand - m_boiler
+    return idle_share * (deficit if deficit > 0.0 else 0.0) + coupling_share * m_boiler

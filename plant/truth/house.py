@@ -60,7 +60,7 @@ class TruthHouse(House):
         self.net_params = net_params or net.NetworkParams()
         self.inlet_mixing_layers = inlet_mixing_layers
         self.sensor_lag = np.zeros(10) if sensor_lag is None else np.asarray(sensor_lag, dtype=float)
-        self._pipe_j = pipe.Params(V=self.net_params.V_junction, T_init=spec.params["return_header"].T_init)
+        self._pipe_j = pipe.Params(V=0.005, T_init=spec.params["return_header"].T_init)
         self._ready = False
         super().__init__(spec, start=start, controller=controller)
 

@@ -52,8 +52,10 @@ from ..water import RHO
 
 CASES = {
     "nominal": ("the ideal twin (plant.house.load_house) with sensor noise only", None, ""),
-    "concealed_idle_flow": ("pressure-driven header: parasitic flow through the idle CHP and "
-                            "boiler suction through the running CHP", 1.0, "x CHP-branch conductance"),
+    "concealed_idle_flow": ("pressure-driven header (generators in parallel, CHP branch without a "
+                            "spring-loaded check valve): parasitic flow through the idle CHP, "
+                            "overrun of the running CHP by a heating deficit", 1.0,
+                            "x CHP-branch conductance"),
     "storage_heat_loss": ("storage heat loss larger than the twin's 20 W/K", 40.0, "W/K storage UA_loss"),
     "sensor_lag": ("first-order lag on storage sensor 10 (read by the controller)", 120.0, "s time constant"),
     "storage_mixing": ("strong inlet mixing in the heating storage", 160.0, "litres of inlet mixing"),
@@ -273,7 +275,8 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
 
 def effect_sizes(truth: dict, sample: float) -> dict:
     """True (noise-free, sample-based) effect sizes: flow through the idle CHP, its share of the
-    heating flow, suction by the boiler, CHP heat true vs metered."""
+    heating flow, CHP flow while CHP and boiler run over its ideal flow (1 = no suction), CHP
+    heat true vs metered."""
     mode = truth["chp.mode"]
     on = (mode >= 0.5) & (mode <= 3.5)
     idle = (mode < 0.5) | (mode > 4.5)

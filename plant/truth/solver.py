@@ -1,19 +1,21 @@
 """Compiled step loop of the house-1 "truth": the twin's components on a pressure-driven network.
 
 Same structure, components and ledger as plant/solver.py (the ideal twin), with three changes:
-  * the generator flows come from plant/truth/hydraulic_network.py (CHP branch without check
-    valve, boiler return line through the common coupling point J, storage as separator) instead
-    of the ideal switch: an idle CHP carries part of the heating deficit, a running boiler sucks
-    extra flow through the CHP (its outlet cools below 80 degC);
+  * the generator flows come from plant/truth/hydraulic_network.py (the twin's layout: both
+    generators draw from the return header and feed the supply header, storage as separator; the
+    CHP branch without a spring-loaded check valve) instead of the ideal switch: an idle CHP
+    carries part of the heating deficit, and a running CHP is overrun when the header forces more
+    than its own pump delivers (its outlet cools below 80 degC);
   * the heating storage may be finer (e.g. 80 layers) and its direct inflows are spread evenly
     over n_mix layers from the port into the tank (inlet mixing, 1 = none);
   * storage sensors may lag (first-order, per sensor), and the controller reads the lagged value.
-Per step: (1) profiles, sensors; (2) controllers; (3) boiler (inlet = coupling point J when the
-network is on), network solve with the CHP pump stopped -> flow the network forces through the
-CHP; CHP with m_ext = that flow (its pump speeds up only if it wants more); second solve with the
-CHP flow fixed -> link, CHP line and storage flows; (4) heating circuit, zone, DHW; (5) storage;
-(6) supply header, return header and the coupling point J (small mixed volumes, outflows at the
-start-of-step temperature, so the ledger closes to round-off); (7) ledger, signals, diagnostics.
+Per step: (1) profiles, sensors; (2) controllers; (3) boiler (inlet = return header), network
+solve with the CHP pump stopped -> flow the network forces through the CHP; CHP with m_ext = that
+flow (its pump speeds up only if it wants more); second solve with the CHP flow fixed -> storage
+flow and header pressure; (4) heating circuit, zone, DHW; (5) storage; (6) supply and return
+headers (small mixed volumes, outflows at the start-of-step temperature, so the ledger closes to
+round-off; the truth keeps an idle spare pipe volume x_j, no flow, for its state layout);
+(7) ledger, signals, diagnostics.
 """
 from __future__ import annotations
 
@@ -161,11 +163,11 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
             s[I_MIX_MSET] = m_req
 
         # 3. generators on the network
-        T_sh, T_rh, T_j = x_sh[0], x_rh[0], x_j[0]
+        T_sh, T_rh = x_sh[0], x_rh[0]
         m_dp = p_sys[SYS_M_DHW_PUMP] if s[I_DHW_ON] > 0.5 else 0.0
         m_mix, m_prim, T_mix_sup, y_valve = mixing_station.step(
             h, x_m, p_m, s[I_MIX_TSET], s[I_MIX_MSET], T_sh, x_r[0])
-        T_b_in = T_j if network else T_rh
+        T_b_in = T_rh
         m_b, T_b, Pel_b, Pf_b, Ph_b, mode_b = boiler.step(
             t, h, x_b, p_b, tabs[3], tabs[4], tabs[5], tabs[6], tabs[7], s[I_BOILER_U], 0.0, T_b_in)
         m_dem = m_prim + m_dp
@@ -176,26 +178,19 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
                                               s[I_CHP_ON], s[I_CHP_YSET], 0.0, T_rh)
         m_forced = 0.0
         if network:
-            net.solve(p_net, m_b, m_dem, False, 0.0, 0.0, x_tr[XT_PS], x_tr[XT_PJ], sol)
+            net.solve(p_net, m_b, m_dem, False, 0.0, 0.0, x_tr[XT_PS], sol)
             m_forced = max(0.0, sol[net.X_M_CHP])
         m_c, T_c, Pel_c, Pf_c, Ph_c, mode_c = chp.step(
             t, h, x_chp, p_chp, tabs[0], tabs[1], tabs[2], s[I_CHP_ON], s[I_CHP_YSET], m_forced, T_rh)
         if network:
             if m_c != sol[net.X_M_CHP]:
-                net.solve(p_net, m_b, m_dem, True, m_c, 0.0, sol[net.X_PS], sol[net.X_PJ], sol)
+                net.solve(p_net, m_b, m_dem, True, m_c, 0.0, sol[net.X_PS], sol)
             x_tr[XT_PS] = sol[net.X_PS]
-            x_tr[XT_PJ] = sol[net.X_PJ]
-            # exact node balances: J takes CHP + link, gives boiler + CHP line
-            m_link = sol[net.X_M_LINK]
-            m_line = m_c + m_link - m_b
-            if m_line < 0.0:
-                m_link -= m_line
-                m_line = 0.0
-            m_to_S = m_b + m_line
-        else:
-            m_link = m_b
-            m_line = m_c
-            m_to_S = m_b + m_c
+            x_tr[XT_PJ] = 0.0
+        # both generators draw from R and feed S (exact balance; the storage takes the rest)
+        m_link = m_b
+        m_line = m_c
+        m_to_S = m_b + m_c
 
         # 4. heating circuit and zone
         T_rad_ret, Q_rad = radiator.step(h, x_r, p_r, m_mix, T_mix_sup, x_z[0])
@@ -232,14 +227,9 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         Ql_st, _q = storage.step(h, T_st, p_st, in_layer, in_m, in_T, out_layer, out_m, out_T,
                                  no_layer, no_layer, no_coil, no_coil, no_coil, no_coil, q_layer[:n_st])
 
-        # 6. headers and the coupling point
-        if network:
-            H_sh = m_b * CP * T_b + m_line * CP * T_j + m_discharge * CP * out_T[0]
-            H_j = m_c * CP * T_c + m_link * CP * T_rh
-            Ql_j = pipe.step(h, x_j, p_j, H_j, m_c + m_link)
-        else:
-            H_sh = m_c * CP * T_c + m_b * CP * T_b + m_discharge * CP * out_T[0]
-            Ql_j = pipe.step(h, x_j, p_j, 0.0, 0.0)
+        # 6. headers (the spare pipe x_j carries no flow)
+        H_sh = m_c * CP * T_c + m_b * CP * T_b + m_discharge * CP * out_T[0]
+        Ql_j = pipe.step(h, x_j, p_j, 0.0, 0.0)
         Ql_sh = pipe.step(h, x_sh, p_sh, H_sh, m_to_S + m_discharge)
         T_coil_out = coil_Tout[0] if m_dp > 0.0 else T_sh
         H_rh = m_prim * CP * T_rad_ret + m_dp * CP * T_coil_out + m_charge * CP * out_T[0]
@@ -268,9 +258,10 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         x_tr[XT_T_BOILER_IN] = T_b_in
         x_tr[XT_Q_CHP_METER] = m_pump * CP * (T_c_sensor - T_rh)
         x_tr[XT_Q_CHP_TRUE] = m_c * CP * (T_c - T_rh)
-        x_tr[XT_Q_LINE_METER] = (m_line * CP * (T_j - T_rh)) if network else m_c * CP * (T_c - T_rh)
-        x_tr[XT_N_CHP] = net.pump_speed(m_pump, x_tr[XT_PJ], p_net[net.CHP_PUMP_H0], 0.0, p_net[net.K_CHP])
-        x_tr[XT_N_BOILER] = net.pump_speed(m_b, x_tr[XT_PS] - x_tr[XT_PJ], p_net[net.BOILER_PUMP_H0],
+        x_tr[XT_Q_LINE_METER] = m_c * CP * (T_c - T_rh)
+        x_tr[XT_N_CHP] = net.pump_speed(m_pump, x_tr[XT_PS], p_net[net.CHP_PUMP_H0], 0.0,
+                                        p_net[net.K_CHP] + p_net[net.K_CHP_LINE])
+        x_tr[XT_N_BOILER] = net.pump_speed(m_b, x_tr[XT_PS], p_net[net.BOILER_PUMP_H0],
                                            p_net[net.BOILER_PUMP_A], p_net[net.BOILER_K])
         x_tr[XT_RES] = sol[net.X_RES] if network else 0.0
         x_tr[XT_ITER] = sol[net.X_ITER] if network else 0.0

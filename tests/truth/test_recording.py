@@ -56,9 +56,9 @@ def test_shipped_recording_reads_back_and_matches_its_meta():
     assert len(t) == meta["rows"] == 10080 and start == meta["start"] == "2021-01-10"
     assert meta["case"] == "concealed_idle_flow" and meta["seed"] == 1
     e = meta["effect"]
-    assert 0.04 < e["idle_chp_flow_mean_kg_s"] < 0.1
-    assert 0.2 < e["idle_chp_share_of_heating_primary_flow"] < 0.3
-    assert 0.02 < e["chp_heat_error_ideal_twin_vs_truth"] < 0.1
+    assert 0.015 < e["idle_chp_flow_mean_kg_s"] < 0.1
+    assert 0.25 < e["idle_chp_share_of_heating_primary_flow"] < 0.5
+    assert 0.02 < abs(e["chp_heat_error_ideal_twin_vs_truth"]) < 0.1  # several %
     readme = (SHIPPED / "README.md").read_text()
     assert meta["command"] in readme and f"{e['idle_chp_flow_mean_kg_s']:.3f}" in readme
     assert data["CHP_S_TM_VL"].max() < 95 and np.nanmax(data["CHP_P_el"]) > 1.5

@@ -15,21 +15,21 @@ I_CFLOW = CATALOGUE.index("chp.m_flow")
 class IdleGeneratorFlow(Effect):
     """A CHP branch open to the generator header (no check valve, common coupling point).
 
-    Two symptoms of the one cause, fitted jointly: while the CHP is off, a share of the heating
-    circuit's primary flow short-circuits through it (connections.idle_flow_chp, which the twin
-    applies only while the CHP is commanded off); while it runs, the boiler pump sucks part of
-    its flow through it (connections.pump_coupling_chp), which keeps its outlet below the set-
-    point. Fitting only the first knob would let it imitate the second (the idle share would be
-    overestimated); the second is fitted only when the recording has CHP-and-boiler periods.
+    Two symptoms of the one cause, fitted jointly: when the consumers draw more than the boiler
+    delivers, a share of that deficit returns through the CHP branch instead of the storage
+    (connections.idle_flow_chp; an idle CHP is flushed, a running one pushed past its own pump);
+    and the boiler pump may push part of its own flow through the CHP on a shared header
+    (connections.pump_coupling_chp). The second is fitted only when the recording has
+    CHP-and-boiler periods, so the first cannot imitate it.
     The named size is the idle flow; the suction is reported next to it.
     """
     id = "idle_generator_flow"
     component = "chp"
     kind = "simulate"
-    params = (Param("idle_flow_chp", 0.0, 0.8, 0.0, "1 (share of the heating primary flow, CHP off)"),
+    params = (Param("idle_flow_chp", 0.0, 0.8, 0.0, "1 (share of the consumers' flow deficit vs the boiler)"),
               Param("pump_coupling_chp", 0.0, 0.8, 0.0, "1 (share of the boiler flow, through the CHP)"))
     description = ("the CHP branch is open to the header: part of the heating circuit's primary flow "
-                   "short-circuits through the idle CHP (connections.idle_flow_chp) and, jointly, the "
+                   "deficit short-circuits through the CHP branch (connections.idle_flow_chp) and, jointly, the "
                    "boiler pump pushes part of its flow through the CHP (connections.pump_coupling_chp)")
 
     def overrides(self, theta):
