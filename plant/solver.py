@@ -22,7 +22,6 @@ cheaper than keeping two copies in step.
 """
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from profiles.loaders import sample
@@ -109,37 +108,23 @@ N_MID = 39
 
 
 @njit(cache=True)
-def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
-    """Steps 1-5 up to the heating storage: profiles, controllers, generators, heating circuit,
-    zone, DHW storage and the hydraulic-switch flows.
-
-    Fills the heating-storage port request in ports (in_layer/out_layer, in_m, in_T, out_m: the
-    charge or discharge flow and its inflow temperature; T_in_top = mid[M_T_SH] when charging,
-    T_in_bottom = mid[M_T_RH] when discharging) and returns `mid`, the tuple of per-step values
-    after_storage needs (indices M_*).
-    """
-    x_chp, x_b, T_st, T_dw, x_z, x_r, x_m, x_sh, x_rh, x_c, x_th = x
-    p_chp, p_b, p_st, p_dw, p_z, p_r, p_m, p_sh, p_rh, p_c, p_th, p_dhw, p_sys = p
+def boundary(t, p_sys, prof):
+    """Step 1: weather and profiles at time t (s since start) -> (T_air, E_dir, E_dif, presence,
+    P_el household, DHW draw [kg/s], tau = local time since the profile year start)."""
     w_T, w_dir, w_dif, pres, pel, draw = prof[0]
     st_w, st_pres, st_pel, st_draw = prof[1]
-    (in_layer, out_layer) = ports[0]
-    (in_m, in_T, out_m, out_T, coil_UA, coil_m, coil_Tin, coil_Tout, q_layer,
-     d_in_m, d_in_T, d_out_m, d_out_T, no_coil) = ports[1]
-    (d_in_layer, d_out_layer, d_coil_top, d_coil_bot, no_layer) = ports[2]
-    top = int(p_sys[SYS_ST_TOP_LAYER])
-    bottom = int(p_sys[SYS_ST_BOTTOM_LAYER])
-    n_dw = T_dw.shape[0]
     tau = p_sys[SYS_TAU0] + t
-    T_air = sample(w_T, st_w, True, tau)
-    E_dir = sample(w_dir, st_w, True, tau)
-    E_dif = sample(w_dif, st_w, True, tau)
-    presence = sample(pres, st_pres, True, tau)
-    P_hh = sample(pel, st_pel, False, tau)
-    m_draw = sample(draw, st_draw, False, tau) * RHO
-    sensors(T_st, s, I_ST_S1)
-    sensors(T_dw, s, I_DHW_S1)
+    return (sample(w_T, st_w, True, tau), sample(w_dir, st_w, True, tau),
+            sample(w_dif, st_w, True, tau), sample(pres, st_pres, True, tau),
+            sample(pel, st_pel, False, tau), sample(draw, st_draw, False, tau) * RHO, tau)
 
-    # 2. controllers
+
+@njit(cache=True)
+def controllers(h, tau, T_air, x, p, s, remote):
+    """Step 2: the rule-based controller and the room thermostat write the command signals they
+    own (not those driven remotely), from the sensor signals in s. Returns the room set-point."""
+    x_z, x_c, x_th = x[4], x[9], x[10]
+    p_z, p_c, p_th = p[4], p[9], p[10]
     T_top = s[I_ST_S1 + int(p_c[rule_based.TOP_SENSOR]) - 1]
     T_bottom = s[I_ST_S1 + int(p_c[rule_based.BOTTOM_SENSOR]) - 1]
     T_dhw_top = s[I_DHW_S1 + int(p_c[rule_based.DHW_TOP_SENSOR]) - 1]
@@ -158,6 +143,32 @@ def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
         s[I_MIX_TSET] = T_sup_req
     if not remote[I_MIX_MSET]:
         s[I_MIX_MSET] = m_req
+    return T_set_room
+
+
+@njit(cache=True)
+def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
+    """Steps 1-5 up to the heating storage: profiles, controllers, generators, heating circuit,
+    zone, DHW storage and the hydraulic-switch flows.
+
+    Fills the heating-storage port request in ports (in_layer/out_layer, in_m, in_T, out_m: the
+    charge or discharge flow and its inflow temperature; T_in_top = mid[M_T_SH] when charging,
+    T_in_bottom = mid[M_T_RH] when discharging) and returns `mid`, the tuple of per-step values
+    after_storage needs (indices M_*).
+    """
+    x_chp, x_b, T_st, T_dw, x_z, x_r, x_m, x_sh, x_rh, x_c, x_th = x
+    p_chp, p_b, p_st, p_dw, p_z, p_r, p_m, p_sh, p_rh, p_c, p_th, p_dhw, p_sys = p
+    (in_layer, out_layer) = ports[0]
+    (in_m, in_T, out_m, out_T, coil_UA, coil_m, coil_Tin, coil_Tout, q_layer,
+     d_in_m, d_in_T, d_out_m, d_out_T, no_coil) = ports[1]
+    (d_in_layer, d_out_layer, d_coil_top, d_coil_bot, no_layer) = ports[2]
+    top = int(p_sys[SYS_ST_TOP_LAYER])
+    bottom = int(p_sys[SYS_ST_BOTTOM_LAYER])
+    n_dw = T_dw.shape[0]
+    T_air, E_dir, E_dif, presence, P_hh, m_draw, tau = boundary(t, p_sys, prof)
+    sensors(T_st, s, I_ST_S1)
+    sensors(T_dw, s, I_DHW_S1)
+    T_set_room = controllers(h, tau, T_air, x, p, s, remote)
 
     # 3. generators
     T_sh, T_rh = x_sh[0], x_rh[0]

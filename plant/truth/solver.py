@@ -21,15 +21,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
-
-from profiles.loaders import sample
 
 from .. import solver as _twin
 from ..catalogue import INDEX as _I
 from ..components import boiler, chp, dhw, mixing_station, pipe, radiator, storage, zone
-from ..controllers import room_thermostat, rule_based
 from ..hydraulics import prescribed
 from ..water import CP, RHO
 from . import hydraulic_network as net
@@ -116,8 +112,6 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
     x = twin states + (x_tr, x_junction, x_chp_scratch) and p = twin params + (p_net, p_tr, p_junction)."""
     x_chp, x_b, T_st, T_dw, x_z, x_r, x_m, x_sh, x_rh, x_c, x_th, x_tr, x_j, x_tmp = x
     p_chp, p_b, p_st, p_dw, p_z, p_r, p_m, p_sh, p_rh, p_c, p_th, p_dhw, p_sys, p_net, p_tr, p_j = p
-    w_T, w_dir, w_dif, pres, pel, draw = prof[0]
-    st_w, st_pres, st_pel, st_draw = prof[1]
     (in_layer, out_layer) = ports[0]
     (in_m, in_T, out_m, out_T, coil_UA, coil_m, coil_Tin, coil_Tout, q_layer,
      d_in_m, d_in_T, d_out_m, d_out_T, no_coil) = ports[1]
@@ -132,35 +126,10 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
     rows = 0
     for k in range(n):
         t = t0 + k * h
-        tau = p_sys[SYS_TAU0] + t
-        T_air = sample(w_T, st_w, True, tau)
-        E_dir = sample(w_dir, st_w, True, tau)
-        E_dif = sample(w_dif, st_w, True, tau)
-        presence = sample(pres, st_pres, True, tau)
-        P_hh = sample(pel, st_pel, False, tau)
-        m_draw = sample(draw, st_draw, False, tau) * RHO
+        T_air, E_dir, E_dif, presence, P_hh, m_draw, tau = _twin.boundary(t, p_sys, prof)
         lagged_sensors(T_st, s, x_tr, p_tr, h, False)
         sensors(T_dw, s, I_DHW_S1)
-
-        # 2. controllers
-        T_top = s[I_ST_S1 + int(p_c[rule_based.TOP_SENSOR]) - 1]
-        T_bottom = s[I_ST_S1 + int(p_c[rule_based.BOTTOM_SENSOR]) - 1]
-        T_dhw_top = s[I_DHW_S1 + int(p_c[rule_based.DHW_TOP_SENSOR]) - 1]
-        c_on, c_y, b_u, d_on = rule_based.step(h, x_c, p_c, T_top, T_bottom, T_dhw_top)
-        if not remote[I_CHP_ON]:
-            s[I_CHP_ON] = c_on
-        if not remote[I_CHP_YSET]:
-            s[I_CHP_YSET] = c_y
-        if not remote[I_BOILER_U]:
-            s[I_BOILER_U] = b_u
-        if not remote[I_DHW_ON]:
-            s[I_DHW_ON] = d_on
-        T_set_room = zone.setpoint(p_z, tau)
-        T_sup_req, m_req = room_thermostat.step(h, x_th, p_th, x_z[0], T_set_room, T_air)
-        if not remote[I_MIX_TSET]:
-            s[I_MIX_TSET] = T_sup_req
-        if not remote[I_MIX_MSET]:
-            s[I_MIX_MSET] = m_req
+        T_set_room = _twin.controllers(h, tau, T_air, x[:11], p[:11], s, remote)
 
         # 3. generators on the network
         T_sh, T_rh = x_sh[0], x_rh[0]
