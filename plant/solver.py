@@ -147,6 +147,34 @@ def controllers(h, tau, T_air, x, p, s, remote):
 
 
 @njit(cache=True)
+def consumers(h, x, p, ports, T_air, E_dir, E_dif, presence, P_hh, m_draw, m_mix, T_mix_sup, m_dp,
+              T_sh):
+    """Step 4: radiators and zone; the DHW draw through the DHW storage (hot out at the top, cold
+    in at the bottom) and its charging coil fed from the supply header at T_sh.
+    Returns (T_rad_ret, Q_rad, Q_int, Q_sol, m_hot, T_tap, Q_miss, Q_loss_dhw, Q_coil, Q_dhw)."""
+    T_dw, x_z, x_r = x[3], x[4], x[5]
+    p_dw, p_z, p_r, p_dhw, p_sys = p[3], p[4], p[5], p[11], p[12]
+    (coil_UA, coil_m, coil_Tin, coil_Tout, q_layer, d_in_m, d_in_T, d_out_m, d_out_T) = (
+        ports[1][4], ports[1][5], ports[1][6], ports[1][7], ports[1][8], ports[1][9], ports[1][10],
+        ports[1][11], ports[1][12])
+    (d_in_layer, d_out_layer, d_coil_top, d_coil_bot) = ports[2][:4]
+    T_rad_ret, Q_rad = radiator.step(h, x_r, p_r, m_mix, T_mix_sup, x_z[0])
+    Q_int, Q_sol, Q_zloss = zone.step(h, x_z, p_z, T_air, E_dir, E_dif, presence, P_hh, Q_rad)
+    m_hot, T_tap, Q_miss = dhw.draw(p_dhw, m_draw, T_dw[d_out_layer[0]])
+    d_in_m[0] = m_hot
+    d_in_T[0] = p_dhw[dhw.T_COLD]
+    d_out_m[0] = m_hot
+    coil_m[0] = m_dp
+    coil_Tin[0] = T_sh
+    coil_UA[0] = p_sys[SYS_DHW_COIL_UA]
+    Ql_dw, Q_coil = storage.step(h, T_dw, p_dw, d_in_layer, d_in_m, d_in_T, d_out_layer, d_out_m,
+                                 d_out_T, d_coil_top, d_coil_bot, coil_UA, coil_m, coil_Tin,
+                                 coil_Tout, q_layer[:T_dw.shape[0]])
+    Q_dhw = m_hot * CP * (d_out_T[0] - p_dhw[dhw.T_COLD])
+    return T_rad_ret, Q_rad, Q_int, Q_sol, m_hot, T_tap, Q_miss, Ql_dw, Q_coil, Q_dhw
+
+
+@njit(cache=True)
 def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
     """Steps 1-5 up to the heating storage: profiles, controllers, generators, heating circuit,
     zone, DHW storage and the hydraulic-switch flows.
@@ -164,7 +192,6 @@ def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
     (d_in_layer, d_out_layer, d_coil_top, d_coil_bot, no_layer) = ports[2]
     top = int(p_sys[SYS_ST_TOP_LAYER])
     bottom = int(p_sys[SYS_ST_BOTTOM_LAYER])
-    n_dw = T_dw.shape[0]
     T_air, E_dir, E_dif, presence, P_hh, m_draw, tau = boundary(t, p_sys, prof)
     sensors(T_st, s, I_ST_S1)
     sensors(T_dw, s, I_DHW_S1)
@@ -182,22 +209,9 @@ def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
     m_c, T_c, Pel_c, Pf_c, Ph_c, mode_c = chp.step(
         t, h, x_chp, p_chp, tabs[0], tabs[1], tabs[2], s[I_CHP_ON], s[I_CHP_YSET], ext_chp, T_rh)
 
-    # 4. heating circuit and zone
-    T_rad_ret, Q_rad = radiator.step(h, x_r, p_r, m_mix, T_mix_sup, x_z[0])
-    Q_int, Q_sol, Q_zloss = zone.step(h, x_z, p_z, T_air, E_dir, E_dif, presence, P_hh, Q_rad)
-
-    # DHW storage: hot out at the top, cold in at the bottom, charging coil from the supply header
-    m_hot, T_tap, Q_miss = dhw.draw(p_dhw, m_draw, T_dw[d_out_layer[0]])
-    d_in_m[0] = m_hot
-    d_in_T[0] = p_dhw[dhw.T_COLD]
-    d_out_m[0] = m_hot
-    coil_m[0] = m_dp
-    coil_Tin[0] = T_sh
-    coil_UA[0] = p_sys[SYS_DHW_COIL_UA]
-    Ql_dw, Q_coil = storage.step(h, T_dw, p_dw, d_in_layer, d_in_m, d_in_T, d_out_layer, d_out_m,
-                                 d_out_T, d_coil_top, d_coil_bot, coil_UA, coil_m, coil_Tin,
-                                 coil_Tout, q_layer[:n_dw])
-    Q_dhw = m_hot * CP * (d_out_T[0] - p_dhw[dhw.T_COLD])
+    # 4. heating circuit, zone, DHW draw through the DHW storage
+    (T_rad_ret, Q_rad, Q_int, Q_sol, m_hot, T_tap, Q_miss, Ql_dw, Q_coil, Q_dhw) = consumers(
+        h, x, p, ports, T_air, E_dir, E_dif, presence, P_hh, m_draw, m_mix, T_mix_sup, m_dp, T_sh)
 
     # 5. hydraulic switch: the heating-storage port request
     m_gen = m_c + m_b

@@ -25,7 +25,7 @@ from numba import njit
 
 from .. import solver as _twin
 from ..catalogue import INDEX as _I
-from ..components import boiler, chp, dhw, mixing_station, pipe, radiator, storage, zone
+from ..components import boiler, chp, mixing_station, pipe, storage
 from ..hydraulics import prescribed
 from ..water import CP, RHO
 from . import hydraulic_network as net
@@ -161,21 +161,10 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         m_line = m_c
         m_to_S = m_b + m_c
 
-        # 4. heating circuit and zone
-        T_rad_ret, Q_rad = radiator.step(h, x_r, p_r, m_mix, T_mix_sup, x_z[0])
-        Q_int, Q_sol, Q_zloss = zone.step(h, x_z, p_z, T_air, E_dir, E_dif, presence, P_hh, Q_rad)
-
-        m_hot, T_tap, Q_miss = dhw.draw(p_dhw, m_draw, T_dw[d_out_layer[0]])
-        d_in_m[0] = m_hot
-        d_in_T[0] = p_dhw[dhw.T_COLD]
-        d_out_m[0] = m_hot
-        coil_m[0] = m_dp
-        coil_Tin[0] = T_sh
-        coil_UA[0] = p_sys[SYS_DHW_COIL_UA]
-        Ql_dw, Q_coil = storage.step(h, T_dw, p_dw, d_in_layer, d_in_m, d_in_T, d_out_layer, d_out_m,
-                                     d_out_T, d_coil_top, d_coil_bot, coil_UA, coil_m, coil_Tin,
-                                     coil_Tout, q_layer[:n_dw])
-        Q_dhw = m_hot * CP * (d_out_T[0] - p_dhw[dhw.T_COLD])
+        # 4. heating circuit, zone, DHW draw through the DHW storage
+        (T_rad_ret, Q_rad, Q_int, Q_sol, m_hot, T_tap, Q_miss, Ql_dw, Q_coil, Q_dhw) = _twin.consumers(
+            h, x[:11], p[:13], ports, T_air, E_dir, E_dif, presence, P_hh, m_draw, m_mix, T_mix_sup,
+            m_dp, T_sh)
 
         # 5. heating storage: the separator takes the balance at S
         m_charge, m_discharge = prescribed.split(m_to_S, m_dem)
