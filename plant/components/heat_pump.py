@@ -122,6 +122,19 @@ def _aux_power(aux, stage):
     return 3.0 * stage
 
 
+@njit(cache=True, inline="always")
+def _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode):
+    """Flow max(own, forced), outlet temperature from the energy balance, energy counters."""
+    m_flow = max(m_own, m_ext)
+    if m_flow <= 0.0:
+        P_heat = 0.0
+    T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
+    x[X_EEL] += P_el * dt
+    x[X_EHEAT] += P_heat * dt
+    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
+    return m_flow, T_out, P_el, P_heat, mode
+
+
 @njit(cache=True)
 def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m_ext, T_in):
     """Advance the CHA-10 by dt from t; returns (m_flow, T_out, P_el, P_heat, mode)."""
@@ -171,14 +184,7 @@ def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m
             m_own = Q_hp / (CP * p[A_DT])
             P_heat = Q_hp + P_aux
             P_el = -(P_hp + P_aux)
-    m_flow = max(m_own, m_ext)
-    if m_flow <= 0.0:
-        P_heat = 0.0
-    T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
-    x[X_EEL] += P_el * dt
-    x[X_EHEAT] += P_heat * dt
-    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
-    return m_flow, T_out, P_el, P_heat, mode
+    return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
 
 
 @njit(cache=True)
@@ -214,11 +220,4 @@ def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
             m_own = Q_hp / (CP * p[B_DT])
             P_heat = Q_hp + P_aux
             P_el = -(P_hp + P_aux)
-    m_flow = max(m_own, m_ext)
-    if m_flow <= 0.0:
-        P_heat = 0.0
-    T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
-    x[X_EEL] += P_el * dt
-    x[X_EHEAT] += P_heat * dt
-    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
-    return m_flow, T_out, P_el, P_heat, mode
+    return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
