@@ -17,7 +17,7 @@ from .effects import catalogue
 
 
 def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effects=None,
-             plots: bool = True, log=print) -> dict:
+             plots: bool = True, log=print, refit_nominal: bool = True) -> dict:
     timing = {}
     t0 = time.perf_counter()
     warnings = list(rec.warnings)
@@ -26,6 +26,16 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     rp = replay.Replayer(rec, house)
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
+    sim_file = nominal_rows[:, ctx.cols]
+    # nominal re-fit (fit.NOMINAL_REFIT, narrow bounds): the baseline is the best nominal twin
+    nref = {"parameters": [], "params": []}
+    if refit_nominal:
+        nref = fit.refit_nominal(ctx, rp, house)
+        nominal_rows = rp.run()
+        nref["train_cost_file"] = ctx.cost(sim_file, ctx.train)
+        nref["heldout_cost_file"] = ctx.cost(sim_file, ctx.held)
+        log("nominal re-fit: " + ", ".join(f"{p['name']} {p['file_value']:.4g} -> {p['fitted_value']:.4g}"
+                                           for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
     J0t, J0h = ctx.cost(sim0, ctx.train), ctx.cost(sim0, ctx.held)
     timing["replay_nominal"] = time.perf_counter() - t0
@@ -50,7 +60,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         if not ok:
             results.append(fit.Result(e.id, e.component, e.kind, False, why, effect=e))
             continue
-        r = fit.fit_simulate(e, ctx, rp, J0t) if e.kind == "simulate" else fit.fit_signal(e, ctx, sim0)
+        r = fit.fit_simulate(e, ctx, rp, J0t, nref["params"]) if e.kind == "simulate" else fit.fit_signal(e, ctx, sim0)
         results.append(r)
         log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
             f"held-out cost {r.held_cost:.4g}")
@@ -67,6 +77,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     t4 = time.perf_counter()
     rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc,
                         terms, warnings)
+    rep["nominal_refit"] = _report.nominal_refit(nref, ctx, sim0, best)
     if out is not None:
         _report.write(rep, out, ctx, nominal_rows, best, plots=plots)
     timing["report"] = time.perf_counter() - t4

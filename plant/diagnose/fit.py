@@ -14,6 +14,15 @@ Selection (the held-out gate keeps the null case honest):
     a persistent mismatch; a smaller gain leaves an "unexplained mismatch";
   * a candidate whose held-out cost is within 25 % of the best and whose fitted simulation differs
     from the best's by less than the best's remaining misfit is reported as indistinguishable.
+
+Nominal re-fit (NOMINAL_REFIT): a few nominal twin parameters that are uncertain in the house
+file but matter for replay are re-fitted within narrow bounds (+-10..15 % of the file value) on
+the training window, (1) for the nominal model alone, so the "before" baseline is the best nominal
+twin (refit_nominal), and (2) jointly with each simulate-kind candidate's own parameters (one
+bounded Brent pass over them after the candidate's fit, then a local pass over the candidate's
+parameters again). The narrow bounds keep them from soaking up a missing effect. They count for
+the nominal model and every candidate alike, so they cancel in the BIC comparison. A candidate
+that fits one of them itself (heat_loss: storage.UA_loss) keeps its own, wide-range, value.
 """
 from __future__ import annotations
 
@@ -24,9 +33,99 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from .effects.base import Param
+
 MIN_GAIN = 0.10
 EXPLAIN = 0.60
 PARSIMONY = 0.02
+
+
+@dataclass(frozen=True)
+class NominalParam:
+    key: str          # house-file override "section.key"
+    rel: float        # bounds: file value * (1 -+ rel)
+    unit: str
+    why: str
+
+
+# Uncertain in the house file, and each sets a replayed signal directly while the commands are
+# replayed (bounds narrow on purpose: an effect the twin lacks must not hide in them):
+NOMINAL_REFIT = (
+    NominalParam("storage.UA_loss", 0.15, "W/K",
+                 "storage standby loss (insulation, plant-room temperature): the slope of all ten "
+                 "storage sensors while no generator runs"),
+    NominalParam("radiator.Q_nominal", 0.10, "W",
+                 "radiator size (rating, valve settings): with the mixer set-points replayed it sets "
+                 "the heating return temperature, hence the storage bottom and switch return"),
+    NominalParam("zone.H_direct", 0.10, "W/K",
+                 "room-to-outdoor conductance (ventilation, leakage): the room temperature and, "
+                 "through it, the radiator emission"),
+)
+JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
+
+
+def nominal_params(house: str, refit=NOMINAL_REFIT) -> list:
+    """Param objects (name = override key, bounds = file value -+ rel) of the re-fitted nominals."""
+    from ..housefile import load
+
+    spec = load(house)
+    out = []
+    for q in refit:
+        section, _, key = q.key.partition(".")
+        v = float(getattr(spec.params[section], key))
+        out.append(Param(q.key, v * (1.0 - q.rel), v * (1.0 + q.rel), v, q.unit))
+    return out
+
+
+def _descent(F, params, theta, idx, maxiter=6, n_grid=3):
+    """One coordinate pass: each parameter in idx by a coarse grid + bounded Brent over its whole
+    (narrow) range, the others held. -> (theta, cost, evaluations)."""
+    theta = list(theta)
+    J = F(theta)
+    nfev = 1
+    for i in idx:
+        p = params[i]
+
+        def f(v, i=i):
+            th = list(theta)
+            th[i] = v
+            return F(th)
+
+        v, Jv, k = _scalar_search(f, p, n_grid=n_grid, maxiter=maxiter)
+        nfev += k
+        if Jv < J:
+            theta[i], J = v, Jv
+    return theta, J, nfev
+
+
+def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
+    """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
+    window; sets replayer.base to them (every later replay starts from them). -> report entry."""
+    params = nominal_params(house, refit)
+    if not params:
+        return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan}
+    t_end = float(ctx.rec.time[ctx.train].max())
+    cache = {}
+
+    def F(theta):
+        key = tuple(round(float(v), 9) for v in theta)
+        if key not in cache:
+            rows = replayer.run({p.name: float(v) for p, v in zip(params, theta)}, until=t_end)
+            cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
+        return cache[key]
+
+    theta0 = [p.nominal for p in params]
+    J_file = F(theta0)
+    theta, J, _ = _descent(F, params, theta0, range(len(params)))
+    replayer.base = {p.name: float(v) for p, v in zip(params, theta)}
+    rows = []
+    for p, q, v in zip(params, refit, theta):
+        rows.append({"name": p.name, "file_value": p.nominal, "fitted_value": float(v),
+                     "change_pct": 100.0 * (v / p.nominal - 1.0) if p.nominal else math.nan,
+                     "bounds": [p.lo, p.hi], "unit": p.unit,
+                     "at_bound": bool(min(v - p.lo, p.hi - v) <= 1e-3 * (p.hi - p.lo)), "why": q.why})
+    return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
+            "evaluations": len(cache), "params": params}
 
 
 @dataclass
@@ -49,6 +148,7 @@ class Result:
     rows: np.ndarray | None = None     # full catalogue rows (simulate kind) for energies/plots
     effect: object = None
     k: int = 1                         # number of fitted parameters (BIC)
+    nominal: dict = field(default_factory=dict)  # jointly re-fitted nominal parameters
 
     def public(self) -> dict:
         return {"id": self.id, "component": self.component if self.signal is None else self.signal,
@@ -58,7 +158,7 @@ class Result:
                                for p, v, s in zip(self.effect.params, self.theta, self.stderr)},
                 "signal": self.signal, "train_cost": self.train_cost, "heldout_cost": self.held_cost,
                 "heldout_gain": self.held_gain, "bic": self.bic, "accepted": self.accepted,
-                "evaluations": self.evaluations}
+                "evaluations": self.evaluations, "nominal_refit": dict(self.nominal)}
 
 
 def bic(cost: float, n_eff: float, k: int) -> float:
@@ -106,23 +206,36 @@ def _stderr(f, p, theta, J, n_eff):
     return float(math.sqrt(2.0 * J / (n_eff * 2.0 * c)))
 
 
-def fit_simulate(effect, ctx, replayer, nominal_cost) -> Result:
+def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     """1 fitted parameter: grid + Brent. Several (effect.fitted(ctx)): coordinate descent - each
     parameter by grid + Brent with the others held, then a second, local pass (bracket +-15 % of
-    the range) over all of them; the parameters not fitted stay nominal."""
+    the range) over all of them; the parameters not fitted stay nominal.
+    nominal: Params of the nominal re-fit (refit_nominal), starting from replayer.base; with
+    JOINT_REFIT they are re-fitted within their bounds after the candidate's own fit (one pass),
+    followed by a local pass over the candidate's parameters. A key the candidate sets itself is
+    left to the candidate."""
     params = effect.params
     free = effect.fitted(ctx)
     t_end = float(ctx.rec.time[ctx.train].max())
     cache = {}
+    own = set(effect.overrides([p.nominal for p in params]))
+    nom = [q for q in (nominal or []) if q.name not in own] if JOINT_REFIT else []
+    ne = len(params)
+
+    def ov(theta):
+        d = {q.name: float(v) for q, v in zip(nom, theta[ne:])}
+        d.update(effect.overrides(list(theta[:ne])))
+        return d
 
     def F(theta):
         key = tuple(round(float(v), 12) for v in theta)
         if key not in cache:
-            rows = replayer.run(effect.overrides(list(theta)), until=t_end)
+            rows = replayer.run(ov(theta), until=t_end)
             cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
         return cache[key]
 
-    theta = [p.nominal for p in params]
+    allp = list(params) + nom
+    theta = [p.nominal for p in params] + [replayer.base.get(q.name, q.nominal) for q in nom]
     J = math.nan
 
     def along(i):
@@ -132,9 +245,8 @@ def fit_simulate(effect, ctx, replayer, nominal_cost) -> Result:
             return F(th)
         return f
 
-    for i in free:
-        theta[i], J, _ = _scalar_search(along(i), params[i])
-    if len(free) > 1:
+    def local_pass():
+        nonlocal J
         for i in free:
             p = params[i]
             lo, hi = _to_u(p, p.lo), _to_u(p, p.hi)
@@ -145,14 +257,25 @@ def fit_simulate(effect, ctx, replayer, nominal_cost) -> Result:
                                   method="bounded", options={"xatol": (hi - lo) * 2e-3, "maxiter": 8})
             if res.fun < J:
                 theta[i], J = _from_u(p, res.x), float(res.fun)
+
+    for i in free:
+        theta[i], J, _ = _scalar_search(along(i), params[i])
+    if len(free) > 1:
+        local_pass()
+    if nom:
+        th, Jn, _ = _descent(F, allp, theta, range(ne, ne + len(nom)), maxiter=5)
+        if Jn < J:
+            theta[:], J = th, Jn
+            local_pass()
     n_eff = ctx.n_eff(ctx.train)
     se = [_stderr(along(i), params[i], theta[i], J, n_eff) if i in free else math.nan
           for i in range(len(params))]
-    rows = replayer.run(effect.overrides(theta))
+    rows = replayer.run(ov(theta))
     sim = rows[:, ctx.cols]
-    r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta), stderr=se,
+    r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
                train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
-               evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect)
+               evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect,
+               nominal={q.name: float(v) for q, v in zip(nom, theta[ne:])})
     r.k = len(free)
     return r
 

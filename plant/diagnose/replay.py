@@ -92,6 +92,9 @@ class Replayer:
         self.idx = [CATALOGUE.index(c) for c in COMMANDS]
         self.notes: list[str] = []
         self._checked = False
+        # re-fitted nominal parameters (fit.refit_nominal): applied to every run; a run's own
+        # overrides take precedence over them
+        self.base: dict = {}
 
     def _init_storage(self, house) -> None:
         for comp, k in (("storage", 2), ("dhw_storage", 3)):
@@ -118,8 +121,9 @@ class Replayer:
         """Rows [n_samples, n_signals] (catalogue order) at the recording's sample times."""
         from ..house import load_house
 
+        ov = {**self.base, **(overrides or {})}
         house = load_house(self.house_name, start=self.rec.start, controller="external",
-                           overrides=overrides or None)
+                           overrides=ov or None)
         t, cmd, idx = self.t, self.cmd, self.idx
         n = len(t) if until is None else int(np.searchsorted(t, until, side="right"))
         out = np.empty((n, len(CATALOGUE)))

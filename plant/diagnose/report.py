@@ -94,6 +94,23 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     return _clean(rep)
 
 
+def nominal_refit(nref, ctx, sim0, best) -> dict:
+    """report.json `nominal_refit`: the re-fitted nominal parameters of the baseline (and, jointly
+    with the selected candidate, its values), with the training/held-out cost of the file values."""
+    params = []
+    for p in nref.get("parameters", []):
+        d = {k: v for k, v in p.items()}
+        if best is not None and p["name"] in best.nominal:
+            d["fitted_with_candidate"] = best.nominal[p["name"]]
+        params.append(d)
+    return _clean({"parameters": params,
+                   "train_cost_file": nref.get("train_cost_file"),
+                   "heldout_cost_file": nref.get("heldout_cost_file"),
+                   "train_cost_refit": ctx.cost(sim0, ctx.train) if params else None,
+                   "heldout_cost_refit": ctx.cost(sim0, ctx.held) if params else None,
+                   "evaluations": nref.get("evaluations", 0)})
+
+
 def _mode_phrase(rep, affected):
     modes = [m for m in rep["locate"]["modes"] if m["time_share"] >= 0.02]
     if not modes:
@@ -163,6 +180,18 @@ def write(rep, out, ctx, nominal_rows, best, plots=True) -> None:
         lines.append(f"effect: {rep['effect']} ({rep['component']})")
         for k, p in rep["parameters"].items():
             lines.append(f"  {k} = {p['value']:.4g} ± {p['stderr'] if p['stderr'] is not None else float('nan'):.2g} {p['unit']}")
+    nr = rep.get("nominal_refit") or {}
+    if nr.get("parameters"):
+        f = lambda x: "-" if x is None else f"{x:.4g}"  # noqa: E731
+        lines += ["", "nominal re-fit (narrow bounds; the 'before' baseline uses the fitted values):", "",
+                  "| parameter | file | fitted (nominal) | fitted (with candidate) | bounds |", "|---|---|---|---|---|"]
+        for p in nr["parameters"]:
+            lines.append(f"| {p['name']} [{p['unit']}] | {f(p['file_value'])} | {f(p['fitted_value'])}"
+                         f"{' (at bound)' if p['at_bound'] else ''} | {f(p.get('fitted_with_candidate'))} | "
+                         f"{f(p['bounds'][0])} .. {f(p['bounds'][1])} |")
+        lines.append(f"\ncost with the file values: training {f(nr['train_cost_file'])}, held-out "
+                     f"{f(nr['heldout_cost_file'])}; re-fitted: training {f(nr['train_cost_refit'])}, "
+                     f"held-out {f(nr['heldout_cost_refit'])}")
     lines += ["", "| signal | RMSE before | after | held-out before | after |", "|---|---|---|---|---|"]
     for s, d in rep["signals"].items():
         f = lambda x: "-" if x is None else f"{x:.3g}"  # noqa: E731

@@ -112,3 +112,28 @@ def test_user_effect_plugs_in():
         assert rep["verdict"] == "no_missing_physics"
     finally:
         REGISTRY.pop("radiator_size_test", None)
+
+
+def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(truth_reports):
+    # the truth's storage loses 60 W/K (file value 20 W/K): the nominal re-fit of storage.UA_loss
+    # (+-15 %) and the other declared nominals must stay within their narrow bounds, alone and
+    # jointly with every candidate, and the re-fitted nominal twin must still leave the mismatch
+    # for the candidate to explain
+    rep = truth_reports("storage_heat_loss")
+    nr = rep["nominal_refit"]
+    names = [p["name"] for p in nr["parameters"]]
+    assert "storage.UA_loss" in names
+    for p in nr["parameters"]:
+        lo, hi = p["bounds"]
+        assert lo <= p["fitted_value"] <= hi, p
+        assert hi <= 1.2 * p["file_value"] and lo >= 0.8 * p["file_value"], p
+    bounds = {p["name"]: p["bounds"] for p in nr["parameters"]}
+    for c in rep["candidates"]:
+        for k, v in (c.get("nominal_refit") or {}).items():
+            assert bounds[k][0] <= v <= bounds[k][1], (c["id"], k, v)
+    assert "storage.UA_loss" not in rep["parameters"]  # heat_loss fits its own, wide-range value
+    # the re-fitted baseline keeps the mismatch; the named effect removes most of it
+    assert rep["locate"]["mismatched_signals"]
+    assert rep["verdict"] == "missing_physics" and rep["effect"] == "heat_loss"
+    best = next(c for c in rep["candidates"] if c["id"] == "heat_loss")
+    assert best["heldout_cost"] < 0.5 * nr["heldout_cost_refit"]
