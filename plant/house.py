@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 from pathlib import Path
 
 import numpy as np
@@ -29,11 +30,14 @@ from profiles import loaders
 
 from . import housefile, solver
 from .catalogue import CATALOGUE
-from .component import index_of, pack
+from .component import pack
 from .components import boiler, chp, mixing_station, pipe, radiator, storage, zone
 from .controllers import room_thermostat, rule_based
-from .errors import ConfigError, SignalError
+from .errors import ConfigError
 from .water import CP, RHO
+
+if TYPE_CHECKING:  # a house whose plant is an FMU (topology = "fmu")
+    from .fmu.house import FmuHouse
 
 STATE_ORDER = ("chp", "boiler", "storage", "dhw_storage", "zone", "radiator", "mixer",
                "supply_header", "return_header", "controller", "thermostat")
@@ -181,19 +185,12 @@ class House:
 
     def set(self, name: str, value: float) -> None:
         sig = CATALOGUE.signal(name)
-        if sig.causality != "input":
-            raise SignalError(f"{name}: is an {sig.causality}, only inputs can be set; inputs: "
-                              + ", ".join(s.name for s in CATALOGUE.inputs()))
-        value = float(value)
-        if not math.isfinite(value):
-            raise SignalError(f"{name} = {value}: must be a finite number [{sig.unit}]")
-        self._s[sig.index] = value
+        self._s[sig.index] = sig.input_value(value, [s.name for s in CATALOGUE.inputs()])
         self._remote[sig.index] = True
 
     def release(self, name: str) -> None:
         sig = CATALOGUE.signal(name)
-        if sig.causality != "input":
-            raise SignalError(f"{name}: is an {sig.causality}, not an input")
+        sig.require_input()
         self._remote[sig.index] = False
 
     def is_remote(self, name: str) -> bool:

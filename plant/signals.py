@@ -6,6 +6,7 @@ change (listed in CHANGES.md).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from difflib import get_close_matches
 
@@ -21,6 +22,21 @@ class Signal:
     causality: str
     description: str
     index: int = -1
+
+    def input_value(self, value, inputs) -> float:
+        """`value` as a float if this signal is an input and the value finite; else SignalError
+        naming the allowed `inputs`."""
+        if self.causality != "input":
+            raise SignalError(f"{self.name}: is an {self.causality}, only inputs can be set; inputs: "
+                              + ", ".join(inputs))
+        value = float(value)
+        if not math.isfinite(value):
+            raise SignalError(f"{self.name} = {value}: must be a finite number [{self.unit}]")
+        return value
+
+    def require_input(self) -> None:
+        if self.causality != "input":
+            raise SignalError(f"{self.name}: is an {self.causality}, not an input")
 
 
 class SignalCatalogue:

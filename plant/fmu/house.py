@@ -118,19 +118,12 @@ class FmuHouse:
 
     def set(self, name: str, value: float) -> None:
         sig = self._signal(name)
-        if sig.causality != "input":
-            raise SignalError(f"{name}: is an {sig.causality}, only inputs can be set; inputs: "
-                              + ", ".join(self._inputs))
-        value = float(value)
-        if not math.isfinite(value):
-            raise SignalError(f"{name} = {value}: must be a finite number [{sig.unit}]")
-        self._s[sig.index] = value
+        self._s[sig.index] = sig.input_value(value, self._inputs)
         self._remote[sig.index] = True
 
     def release(self, name: str) -> None:
         sig = self._signal(name)
-        if sig.causality != "input":
-            raise SignalError(f"{name}: is an {sig.causality}, not an input")
+        sig.require_input()
         self._remote[sig.index] = False
         self._s[sig.index] = self._fmu.input_starts[self._inputs.index(name)]
 
