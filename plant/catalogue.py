@@ -33,6 +33,8 @@ SIGNALS = [
     ("chp.m_flow", "kg/s", "output", "water flow through the CHP"),
     ("chp.P_el", "W", "output", "electric power, + produced, - consumed"),
     ("chp.Q_flow", "W", "output", "heat delivered to the circuit m cp (T_sup - T_ret)"),
+    ("chp.m_flow_pump", "kg/s", "output", "flow of the CHP's internal pump (chp.m_flow is larger when the header forces flow through the unit)"),
+    ("chp.Q_flow_meter", "W", "output", "the CHP's own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it"),
     ("chp.P_fuel", "W", "output", "fuel power (LHV)"),
     ("chp.y", "1", "output", "effective electric modulation"),
     ("chp.mode", "1", "output", "0 idle, 1 start-up, 2 warm-up, 3 steady, 4 cool-down, 5 locked out, 8 fault"),

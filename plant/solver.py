@@ -311,6 +311,8 @@ def after_storage(t, h, x, p, ports, s, ledger, mid, Ql_st):
     s[S_chp__m_flow] = m_c
     s[S_chp__P_el] = mid[M_PEL_C]
     s[S_chp__Q_flow] = m_c * CP * (T_c - T_rh)
+    s[S_chp__m_flow_pump] = x_chp[chp.X_MPUMP]
+    s[S_chp__Q_flow_meter] = x_chp[chp.X_MPUMP] * CP * (s[S_chp__T_sup] - T_rh)
     s[S_chp__P_fuel] = mid[M_PF_C]
     s[S_chp__y] = x_chp[chp.X_Y]
     s[S_chp__mode] = mid[M_MODE_C]

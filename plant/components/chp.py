@@ -103,9 +103,9 @@ T_STEADY, T_AMB, T_STOP, T_SUP_SET, T_RET_MAX, T_RET_MIN, P_IDLE, SLEW = range(8
 V_WATER, M_PUMP_MAX, TAU_PUMP, INITIAL_DOWNTIME, T_W0 = range(16, 21)
 
 STATES = ("y", "T_w", "t_on", "t_off", "running", "m_last", "m_stop", "f0", "t_start",
-          "starts", "run_seconds", "E_fuel", "E_el", "E_heat")
+          "starts", "run_seconds", "E_fuel", "E_el", "E_heat", "m_pump")
 X_Y, X_TW, X_TON, X_TOFF, X_RUN, X_MLAST, X_MSTOP, X_F0, X_TSTART = range(9)
-X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT = range(9, 14)
+X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT, X_MPUMP = range(9, 15)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -241,6 +241,8 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
         else:
             P_el = -p[P_IDLE]
             mode = 5.0 if on > 0.5 else 0.0
+    # the internal pump's own flow: what the unit's heat counter multiplies by its delta T
+    x[X_MPUMP] = m_pump
     m_flow = max(m_pump, m_ext)
     dT, T_out = _water(Tw, P_heat, m_flow, T_in, C, dt)
     x[X_TW] = Tw + dT

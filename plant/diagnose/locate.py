@@ -121,9 +121,19 @@ def modes(ctx, sim: np.ndarray, mask: np.ndarray | None = None) -> list[dict]:
     return out
 
 
+def heat_signal(ctx, comp: str) -> str:
+    """The heat signal a component is judged on: the recorded one, so that the twin is read
+    through the same instrument (a unit's own heat counter, chp.Q_flow_meter, reads its pump's
+    flow only; a heat meter in the branch, chp.Q_flow, reads all of it)."""
+    for name in (f"{comp}.Q_flow_meter", f"{comp}.Q_flow"):
+        if name in CATALOGUE and ctx.rec.has(name):
+            return name
+    return f"{comp}.Q_flow"
+
+
 def _heat(ctx, rows_or_meas, kind: str, comp: str, mask=None):
-    """Integrated heat [kWh] of a component from Q signal, or m cp dT when Q is not recorded
-    (over the samples in mask; all samples when None)."""
+    """Integrated heat [kWh] of a component from its recorded heat signal, or m cp dT when none
+    is recorded (over the samples in mask; all samples when None)."""
     t = ctx.rec.time
     dt = np.diff(t, prepend=t[0])
     if mask is not None:
@@ -132,7 +142,7 @@ def _heat(ctx, rows_or_meas, kind: str, comp: str, mask=None):
         if kind == "sim":
             return rows_or_meas[:, CATALOGUE.index(name)]
         return ctx.rec.data.get(name)
-    q = get(f"{comp}.Q_flow")
+    q = get(heat_signal(ctx, comp))
     if q is None and kind == "meas":
         m, a, b = get(f"{comp}.m_flow"), get(f"{comp}.T_sup"), get(f"{comp}.T_ret")
         if m is None or a is None or b is None:
@@ -151,7 +161,7 @@ def energy(ctx, nominal_rows, fitted_rows=None, mask=None) -> dict:
         if meas is None:
             continue
         before = _heat(ctx, nominal_rows, "sim", comp, mask)
-        d = {"measured_kWh": meas, "simulated_before_kWh": before,
+        d = {"signal": heat_signal(ctx, comp), "measured_kWh": meas, "simulated_before_kWh": before,
              "error_before_pct": 100 * (before - meas) / abs(meas) if abs(meas) > 1e-6 else None}
         if fitted_rows is not None:
             after = _heat(ctx, fitted_rows, "sim", comp, mask)

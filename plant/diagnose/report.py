@@ -19,6 +19,21 @@ def _rms(ctx, sim, mask, signals):
     return float(math.sqrt(np.nanmean(mse))) if idx else math.nan
 
 
+def _unit(signal: str) -> str:
+    u = CATALOGUE.signal(signal).unit
+    return "K" if u == "degC" else u
+
+
+def _rms_by_unit(ctx, sim0, after, mask, signals) -> dict:
+    """Held-out RMSE of the affected signals, one figure per unit (an RMSE over K and W together
+    means nothing)."""
+    out = {}
+    for u in dict.fromkeys(_unit(s) for s in signals):
+        sig = [s for s in signals if _unit(s) == u]
+        out[u] = {"signals": sig, "before": _rms(ctx, sim0, mask, sig), "after": _rms(ctx, after, mask, sig)}
+    return out
+
+
 def _clean(o):
     if isinstance(o, dict):
         return {str(k): _clean(v) for k, v in o.items()}
@@ -51,6 +66,7 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     affected = loc["mismatched_signals"]
     if best is not None and best.signal:
         affected = [best.signal]
+    by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(s) != "K"))
     energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
     energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
     if best is not None and best.kind == "signal":
@@ -79,8 +95,11 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
         "indistinguishable_from": twins,
         "explained_share": explained,
         "affected_signals": affected,
-        "affected_heldout_rmse_before": _rms(ctx, sim0, ctx.held, affected),
-        "affected_heldout_rmse_after": _rms(ctx, after, ctx.held, affected),
+        # headline: the affected temperatures (K) when there are any, else the first unit's signals
+        "affected_heldout_rmse_unit": next(iter(by_unit), None),
+        "affected_heldout_rmse_before": by_unit[next(iter(by_unit))]["before"] if by_unit else math.nan,
+        "affected_heldout_rmse_after": by_unit[next(iter(by_unit))]["after"] if by_unit else math.nan,
+        "affected_heldout_rmse_by_unit": by_unit,
         "cost": {"nominal_train": ctx.cost(sim0, ctx.train), "nominal_heldout": ctx.cost(sim0, ctx.held),
                  "noise_floor": ctx.noise_cost()},
         "signals": signals,
@@ -142,13 +161,19 @@ def finding(rep, ctx, best) -> str:
             desc.append(f"{', '.join(higher)} {'is' if len(higher) == 1 else 'are'} higher than simulated")
         parts.append((f"During '{mode}' periods (where the error concentrates), " if mode else "")
                      + " and ".join(desc))
-    unit = "K" if all(CATALOGUE.signal(s).unit == "degC" for s in aff) else "(mixed units)"
-    b, a = rep["affected_heldout_rmse_before"], rep["affected_heldout_rmse_after"]
     if v == "missing_physics":
         txt = (f"best explained by {best.effect.id} ({best.effect.summary(best.theta, ctx, best.rows)}"
                + (f" on {best.signal}" if best.signal else "") + ")")
-        if b is not None and a is not None:
-            txt += f"; held-out RMSE of the affected signals {b:.2f} {unit} -> {a:.2f} {unit}"
+        rms = [f"{'the affected temperatures' if u == 'K' else ', '.join(d['signals'])} "
+               f"{d['before']:.3g} {u} -> {d['after']:.3g} {u}"
+               for u, d in rep["affected_heldout_rmse_by_unit"].items()
+               if d["before"] is not None and d["after"] is not None]
+        if rms:
+            txt += "; held-out RMSE of " + ", of ".join(rms)
+        chp = rep["energy"].get("chp", {})
+        if chp.get("error_before_pct") is not None and chp.get("error_after_pct") is not None:
+            txt += (f"; CHP heat ({chp['signal']}) error {chp['error_before_pct']:+.1f} % -> "
+                    f"{chp['error_after_pct']:+.1f} %")
         if rep["indistinguishable_from"]:
             txt += ("; the sensors cannot tell it apart from " + ", ".join(rep["indistinguishable_from"]))
         parts.append(txt)

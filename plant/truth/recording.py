@@ -15,9 +15,10 @@ What is "measured" and how (the lab's instrumentation, as decided here):
   * temperatures: + N(0, 0.07 K), quantised to 0.1 K; the outdoor temperature N(0, 0.1 K);
   * flows (boiler, heating circuit, DHW charging, DHW tap) in l/min: x (1 + N(0, 1 %)), quantised
     to 0.1 l/min; there is NO flow meter in the CHP branch;
-  * powers in kW: x (1 + N(0, 1 %)), quantised to 0.01 kW. CHP_P_heat is the CHP branch's
-    heat meter (true m cp (T_sup - T_ret) of the branch); its internal flow sensor is NOT logged,
-    so the flow through the CHP (and the idle flow) appears in no column. The idle flow shows
+  * powers in kW: x (1 + N(0, 1 %)), quantised to 0.01 kW. CHP_P_heat is the heat the CHP itself
+    reports (chp.Q_flow_meter: its internal pump's flow x (T_sup - T_ret)), as a lab without a
+    flow meter in the CHP branch gets it; the pump flow itself is NOT logged, and a flow the
+    header forces through the unit is seen by no meter. The idle flow shows
     only indirectly: the idle CHP's outlet cools to the return temperature, the running CHP's
     outlet stays below 80 degC (forced flow), storage and controller timing differ;
   * commands and set-points (CHP on/modulation, boiler 0-10 V, DHW pump, mixer set-points) are
@@ -75,7 +76,7 @@ COLUMNS = [
     ("CHP_S_TM_VL", "chp.T_sup", "degC", "T"),
     ("CHP_S_TM_RL", "chp.T_ret", "degC", "T"),
     ("CHP_P_el", "chp.P_el", "kW", "power"),
-    ("CHP_P_heat", "chp.Q_flow", "kW", "power"),
+    ("CHP_P_heat", "chp.Q_flow_meter", "kW", "power"),
     ("CHP_P_fuel", "chp.P_fuel", "kW", "power"),
     ("CB_S_TM_VL", "boiler.T_sup", "degC", "T"),
     ("CB_S_TM_RL", "boiler.T_ret", "degC", "T"),
@@ -256,8 +257,8 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
                   "outdoor_temperature_K": NOISE["Tair"][0], "flow_relative": NOISE["flow"][0],
                   "flow_quantum_l_per_min": NOISE["flow"][1], "power_relative": NOISE["power"][0],
                   "power_quantum_kW": NOISE["power"][1]},
-        "chp_heat_meter": "CHP_P_heat = heat meter of the CHP branch (m cp (T_sup - T_ret)); its flow "
-                          "sensor is not logged: no recorded column shows the flow through the CHP",
+        "chp_heat_meter": "CHP_P_heat = the CHP's own heat counter (internal-pump flow x (T_sup - T_ret)); "
+                          "no recorded column shows the flow through the CHP",
         "truth_parameters": params,
         "effect": effect,
         "ledger_kWh": {k: ledger[k] / 3.6e6 for k in ("fuel", "heat_chp", "heat_boiler",

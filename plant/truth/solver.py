@@ -236,6 +236,8 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         s[S_chp__m_flow] = m_c
         s[S_chp__P_el] = Pel_c
         s[S_chp__Q_flow] = m_c * CP * (T_c - T_rh)
+        s[S_chp__m_flow_pump] = m_pump
+        s[S_chp__Q_flow_meter] = m_pump * CP * (T_c_sensor - T_rh)
         s[S_chp__P_fuel] = Pf_c
         s[S_chp__y] = x_chp[chp.X_Y]
         s[S_chp__mode] = mode_c

@@ -32,7 +32,7 @@ def test_indices_match_field_order():
     for name, i in idx.items():
         assert getattr(chp, name.upper()) == i, name
     assert chp.STATES[chp.X_TW] == "T_w" and chp.STATES[chp.X_EHEAT] == "E_heat"
-    assert len(chp.STATES) == 14
+    assert len(chp.STATES) == 15
 
 
 def test_bad_param_is_reported_with_key_and_range():

@@ -9,6 +9,7 @@ from .base import Effect, Param, register
 I_PRIM = CATALOGUE.index("mixer.m_flow_primary")
 I_BFLOW = CATALOGUE.index("boiler.m_flow")
 I_CFLOW = CATALOGUE.index("chp.m_flow")
+I_CMODE = CATALOGUE.index("chp.mode")
 
 
 @register
@@ -56,13 +57,20 @@ class IdleGeneratorFlow(Effect):
         return sel2 if sel2.sum() >= 10 else sel
 
     def _flow(self, theta, ctx, sim):
+        """(mean flow through the idle CHP, its share of the heating primary flow, mean primary
+        flow) in the fitted twin: read from the fitted run itself over the samples where the
+        simulated CHP is idle (not in its cool-down run-on), the boiler pump stands and the heating
+        pump runs - the definition of the truth's effect size in plant/truth/recording.py."""
         if sim is None:
-            return None, None
-        sel = self._idle_mask(ctx)[: len(sim)]
-        prim = sim[:, I_PRIM][sel]
-        if prim.size == 0:
-            return None, None
-        return float(theta[0] * prim.mean()), float(prim.mean())
+            return None, None, None
+        n = len(sim)
+        mode = sim[:, I_CMODE]
+        sel = (self._idle_mask(ctx)[:n] & ((mode < 0.5) | (mode > 4.5)) & (sim[:, I_BFLOW] <= 0.0)
+               & (sim[:, I_PRIM] > 0.02))
+        if sel.sum() < 10:
+            return None, None, None
+        m, prim = sim[:, I_CFLOW][sel], sim[:, I_PRIM][sel]
+        return float(m.mean()), float(m.sum() / prim.sum()), float(prim.mean())
 
     def _suction(self, theta, ctx, sim):
         if sim is None or len(theta) < 2:
@@ -73,10 +81,11 @@ class IdleGeneratorFlow(Effect):
         return float(sim[:, I_CFLOW][sel].mean()), float(theta[1] * sim[:, I_BFLOW][sel].mean())
 
     def size(self, theta, ctx, sim=None):
-        m, prim = self._flow(theta, ctx, sim)
-        out = {"share_of_heating_primary_flow": float(theta[0])}
+        m, share, prim = self._flow(theta, ctx, sim)
+        out = {"share_of_consumer_deficit": float(theta[0])}
         if m is not None:
             out["flow_kg_s"] = m
+            out["share_of_heating_primary_flow"] = share
             out["heating_primary_flow_kg_s"] = prim
         if len(theta) > 1:
             out["share_of_boiler_flow_through_running_chp"] = float(theta[1])
@@ -87,12 +96,13 @@ class IdleGeneratorFlow(Effect):
         return out
 
     def summary(self, theta, ctx, sim=None):
-        m, prim = self._flow(theta, ctx, sim)
+        m, share, prim = self._flow(theta, ctx, sim)
         if m is None:
-            txt = f"{theta[0] * 100:.0f} % of the heating primary flow through the idle CHP"
+            txt = f"{theta[0] * 100:.0f} % of the consumers' flow deficit through the idle CHP"
         else:
-            txt = (f"a flow of {m:.3f} kg/s through the idle CHP, {theta[0] * 100:.0f} % of the heating "
-                   f"primary flow (mean {prim:.3f} kg/s while the CHP is off and the heating pump on)")
+            txt = (f"a flow of {m:.3f} kg/s through the idle CHP, {share * 100:.0f} % of the heating "
+                   f"primary flow (mean {prim:.3f} kg/s while the CHP and the boiler stand and the "
+                   "heating pump runs)")
         if len(theta) > 1 and theta[1] > 0:
             su = self._suction(theta, ctx, sim)
             txt += (f"; jointly fitted: the boiler pump pushes {theta[1] * 100:.0f} % of its flow through "
