@@ -77,6 +77,26 @@ def test_storage_inlet_mixing_is_the_best_candidate(truth_reports):
     assert rep["affected_heldout_rmse_after"] < 0.8 * rep["affected_heldout_rmse_before"]
 
 
+def test_concealed_idle_flow_is_named_sized_and_fixes_the_chp_heat(tmp_path):
+    # the truth's pressure-driven header (no CHP flow meter; CHP_P_heat is the unit's own
+    # counter): the idle flow is named without being told, its size read from the fitted run is
+    # within 20 % of the truth's, the affected temperatures improve >= 50 % and the CHP heat
+    # error (the unit's counter, replayed) drops from several percent to < 1 %
+    meta = make_recording("concealed_idle_flow", tmp_path, days=DAYS, seed=7)
+    rec = recording_io.load(tmp_path / "recording.csv", tmp_path / "columns.toml")
+    rep = diagnose(rec, train_days=TRAIN, log=quiet, plots=False)
+    assert rep["verdict"] == "missing_physics", rep["finding"]
+    assert rep["effect"] == "idle_generator_flow"
+    truth = meta["effect"]["idle_chp_flow_mean_kg_s"]
+    assert abs(rep["size"]["flow_kg_s"] - truth) < 0.2 * truth, (rep["size"], truth)
+    rms = rep["affected_heldout_rmse_by_unit"]["K"]
+    assert rep["affected_heldout_rmse_unit"] == "K"
+    assert rms["after"] < 0.5 * rms["before"]
+    chp = rep["energy"]["chp"]
+    assert chp["signal"] == "chp.Q_flow_meter"
+    assert chp["error_before_pct"] > 3.0 and abs(chp["error_after_pct"]) < 1.0, chp
+
+
 def test_idle_flow_knob_is_recovered():
     # the twin itself with connections.idle_flow_chp = 0.25 (no suction): the joint candidate must
     # recover the idle share (a coupling share below the CHP's own pump flow has no effect, so it
