@@ -13,6 +13,12 @@ Mass balance: primary flow in = primary flow out = y x m_flow; exact energy foll
 | m_flow_max | kg/s | pump maximum (15 l/min) |
 | t_stroke | s | actuator running time for a full stroke |
 | K_i | 1/(K s) | integral gain of the supply-temperature correction |
+| leak | 1 | primary share the closed valve still passes (seat leakage; 0 = tight) |
+
+Leakage: the valve's primary share is leak + (1 - leak) y, so a closed valve (y = 0) still lets
+`leak` of the circuit flow in from the primary side; the controller compensates while it can
+(y > 0), so a leak shows when the valve should be closed (supply set-point at or below the
+circuit return). leak = 0 is bit-identical to a tight valve.
 """
 from __future__ import annotations
 
@@ -31,9 +37,10 @@ class Params:
     m_flow_max: float = param(0.25, "kg/s", "pump maximum flow (15 l/min)", 0.001, 10)
     t_stroke: float = param(120.0, "s", "valve actuator running time 0 -> 100 %", 1, 3600)
     K_i: float = param(2.0e-4, "1/(K s)", "integral gain on the supply-temperature error", 0, 1)
+    leak: float = param(0.0, "1", "primary share the closed valve still passes (seat leakage)", 0.0, 0.5)
 
 
-M_FLOW_MAX, T_STROKE, K_I = range(3)
+M_FLOW_MAX, T_STROKE, K_I, LEAK = range(4)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -44,14 +51,15 @@ def initial_state(params: Params) -> np.ndarray:
 def step(dt, x, p, T_set, m_flow_set, T_primary, T_ret):
     """Move the valve for dt; returns (m_flow, m_flow_primary, T_sup after mixing, y)."""
     m = min(max(m_flow_set, 0.0), p[M_FLOW_MAX])
-    y = x[0]
+    y = p[LEAK] + (1.0 - p[LEAK]) * x[0]
     T_sup = y * T_primary + (1.0 - y) * T_ret
     if m > 0.0:
         span = T_primary - T_ret
         y_ff = (T_set - T_ret) / span if span > 0.1 else 1.0
         x[1] = min(max(x[1] + dt * p[K_I] * (T_set - T_sup), -0.3), 0.3)
         target = min(max(y_ff + x[1], 0.0), 1.0)
-        dy = target - y
+        # the actuator position that gives the target share past the leak
+        dy = max((target - p[LEAK]) / (1.0 - p[LEAK]), 0.0) - x[0]
         lim = dt / p[T_STROKE]
-        x[0] = y + min(max(dy, -lim), lim)
+        x[0] = x[0] + min(max(dy, -lim), lim)
     return m, y * m, T_sup, y

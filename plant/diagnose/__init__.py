@@ -37,6 +37,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         log("nominal re-fit: " + ", ".join(f"{p['name']} {p['file_value']:.4g} -> {p['fitted_value']:.4g}"
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
+    ctx.nominal_rows = nominal_rows  # the replayed states, for candidates' plausible()
     J0t, J0h = ctx.cost(sim0, ctx.train), ctx.cost(sim0, ctx.held)
     timing["replay_nominal"] = time.perf_counter() - t0
     log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "

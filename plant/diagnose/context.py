@@ -34,6 +34,7 @@ class Context:
     noise: np.ndarray        # estimated white-noise sigma per measured signal
     flags: dict = field(default_factory=dict)
     cols: np.ndarray | None = None  # catalogue indices of the measured signals
+    nominal_rows: np.ndarray | None = None  # the nominal replay, all catalogue signals (set by diagnose)
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0):

@@ -38,18 +38,23 @@ CASES = {
     "sensor_lag": ("lag", "storage.T_sensor_10", 600.0),
     "sensor_offset": ("offset", "switch.T_ret", 1.5),
     "transport_delay": ("delay", "mixer.T_ret", 300.0),
+    "valve_leakage": ("override", "mixer.leak", 0.1),
 }
 
 
 def make(effect: str = "none", size: float | None = None, days: float = 3.0, start: str = "2021-01-10",
          interval: float = 60.0, seed: int = 1, signals=None, noise: bool = True,
-         conceal=("chp.m_flow",)) -> Recording:
+         conceal=("chp.m_flow",), base: dict | None = None) -> Recording:
+    """base: house-file overrides of the operating conditions (e.g. a low heating set-point, so
+    that the mixing valve closes), applied with and without the effect alike."""
     kind, key, default = CASES[effect]
     size = default if size is None else size
     from ..house import load_house
 
-    overrides = {key: size} if kind == "override" and key else None
-    house = load_house("house1", start=start, overrides=overrides)
+    overrides = dict(base or {})
+    if kind == "override" and key:
+        overrides[key] = size
+    house = load_house("house1", start=start, overrides=overrides or None)
     times, rows = house.run(days * 86400.0, dt=1.0, out_interval=interval)
     col = {n: i for i, n in enumerate(CATALOGUE.names)}
     signals = [s for s in (signals or LAB_SIGNALS) if s not in conceal]

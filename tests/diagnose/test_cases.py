@@ -112,6 +112,22 @@ def test_idle_flow_knob_is_recovered():
                                           "heldout_rmse_after"}
 
 
+def test_valve_leakage_shows_only_where_the_valve_closes():
+    # the controller hides a seat leak while the valve is open; with a 20 degC supply set-point
+    # the valve stands closed and an 8 % leak is the only way heat enters the circuit
+    rec = synth.make("valve_leakage", 0.08, days=1.2, base={"thermostat.T_sup_constant": 20.0})
+    rep = diagnose(rec, train_days=0.5, log=quiet, plots=False)
+    assert rep["verdict"] == "missing_physics", rep["finding"]
+    assert rep["effect"] == "valve_leakage"
+    assert abs(rep["parameters"]["leak"]["value"] - 0.08) < 0.2 * 0.08
+    # with the house's usual 60 degC supply the valve never closes: not testable, said so
+    rec = synth.make("none", days=0.5)
+    rep = diagnose(rec, train_days=0.2, log=quiet, plots=False, refit_nominal=False,
+                   effects=[e for e in catalogue() if e.id == "valve_leakage"])
+    leak = next(c for c in rep["candidates"] if c["id"] == "valve_leakage")
+    assert not leak["plausible"] and "never closed" in leak["reason"]
+
+
 def test_user_effect_plugs_in():
     @register
     class RadiatorSize(Effect):

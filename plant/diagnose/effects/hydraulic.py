@@ -10,6 +10,7 @@ I_PRIM = CATALOGUE.index("mixer.m_flow_primary")
 I_BFLOW = CATALOGUE.index("boiler.m_flow")
 I_CFLOW = CATALOGUE.index("chp.m_flow")
 I_CMODE = CATALOGUE.index("chp.mode")
+I_VALVE = CATALOGUE.index("mixer.y_valve")
 
 
 @register
@@ -140,14 +141,30 @@ class PumpCoupling(Effect):
 
 @register
 class ValveLeakage(Effect):
+    """Seat leakage of the heating circuit's mixing valve (mixer.leak): a closed valve still lets
+    a share of the circuit flow in from the supply header. The controller hides a leak while the
+    valve is open, so it is tested only when the replayed valve stands (nearly) closed with the
+    pump running for a noticeable share of the recording."""
     id = "valve_leakage"
     component = "mixer"
     kind = "simulate"
-    params = (Param("leak_share", 0.0, 0.3, 0.0, "1"),)
-    available = False
-    description = ("leakage of the closed mixing valve: NOT testable yet - the compiled loop has no "
-                   "leakage knob in plant/components/mixing_station.py (a leak through a closed "
-                   "generator check valve looks like idle_generator_flow)")
+    params = (Param("leak", 0.0, 0.3, 0.0, "1 (primary share through the closed mixing valve)"),)
+    description = ("the closed mixing valve leaks: part of the heating circuit's flow still comes "
+                   "from the supply header (mixer.leak)")
 
     def overrides(self, theta):
-        raise NotImplementedError(self.description)
+        return {"mixer.leak": float(theta[0])}
+
+    def plausible(self, ctx):
+        rows = ctx.nominal_rows
+        if rows is None:
+            return True, ""
+        on = ctx.mode_mask("heating_on")[: len(rows)]
+        closed = on & (rows[:, I_VALVE] < 0.05)
+        if closed.sum() < 0.02 * len(rows):
+            return False, ("the replayed mixing valve is (almost) never closed while the pump runs, "
+                           "so a seat leak cannot show")
+        return True, ""
+
+    def summary(self, theta, ctx, sim=None):
+        return f"{theta[0] * 100:.1f} % of the heating circuit flow through the closed mixing valve"
