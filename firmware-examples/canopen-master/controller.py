@@ -37,7 +37,7 @@ if str(ROOT) not in sys.path:
 # the object dictionaries are the ones `twin devices export-eds` writes, built from the maps
 from gateway.maps.model import load_map  # noqa: E402
 from gateway.transports.can_bus import open_bus  # noqa: E402
-from gateway.transports.canopen_node import build_object_dictionary  # noqa: E402
+from gateway.transports.canopen_od import build_object_dictionary  # noqa: E402
 
 NODE_CHP, NODE_BOILER, NODE_IO, NODE_DHW = 0x11, 0x12, 0x15, 0x16
 MAPS = {NODE_CHP: "chp_neotower2", NODE_BOILER: "boiler_wolf_cgb", NODE_IO: "storage_io",

@@ -30,7 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     lint.add_argument("name", nargs="?")
     lint.add_argument("--house", default="house1", help="catalogue to check bindings against")
     lint.add_argument("--no-plant", action="store_true", help="skip binding checks")
-    eds = verbs.add_parser("export-eds", help="CANopen EDS (needs gateway.transports.canopen_node)")
+    eds = verbs.add_parser("export-eds", help="CANopen EDS (needs gateway.transports.canopen_od)")
     eds.add_argument("name")
     eds.add_argument("--out", help="file to write (default: stdout)")
     table = verbs.add_parser("export-table", help="register table as CSV or Markdown")
@@ -79,14 +79,14 @@ def _lint(args: argparse.Namespace) -> int:
 
 
 def _eds(args: argparse.Namespace) -> int:
-    if importlib.util.find_spec("gateway.transports.canopen_node") is None:
-        print("twin devices export-eds: gateway.transports.canopen_node is not installed yet; "
+    if importlib.util.find_spec("gateway.transports.canopen_od") is None:
+        print("twin devices export-eds: gateway.transports.canopen_od is not installed yet; "
               "no EDS export available", file=sys.stderr)
         return 2
-    node = importlib.import_module("gateway.transports.canopen_node")
-    exporter = getattr(node, "export_eds", None)
+    od = importlib.import_module("gateway.transports.canopen_od")
+    exporter = getattr(od, "export_eds", None)
     if exporter is None:
-        print("twin devices export-eds: gateway.transports.canopen_node has no export_eds(dmap, "
+        print("twin devices export-eds: gateway.transports.canopen_od has no export_eds(dmap, "
               "path_or_none); ask its author", file=sys.stderr)
         return 2
     result = exporter(load_map(map_path(args.name)), args.out)

@@ -24,7 +24,8 @@ from gateway.maps import codec
 from gateway.maps.model import DEVICES_DIR, load_map
 from gateway.transports.can_bus import open_bus
 from gateway.transports.can_hub import CanHub
-from gateway.transports.canopen_node import CanopenTransport, build_object_dictionary, export_eds
+from gateway.transports.canopen_node import CanopenTransport
+from gateway.transports.canopen_od import build_object_dictionary, export_eds
 from plant.house import load_house
 from tests.gateway.contract import TIMEOUT, DeviceContract, build_gateway
 

@@ -105,7 +105,7 @@ def test_runtime_serves_canopen_nodes_with_live_plant_values(tmp_path):
     import canopen
 
     from gateway.transports.can_bus import open_bus
-    from gateway.transports.canopen_node import build_object_dictionary
+    from gateway.transports.canopen_od import build_object_dictionary
 
     bus = f"virtual:rt-{uuid.uuid4().hex[:8]}"
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0))
