@@ -108,6 +108,9 @@ class House:
             sys[solver.SYS_TAU0] = loaders.start_offset(self.start)
         sys[solver.SYS_IDLE_FLOW_CHP] = c.idle_flow_chp
         sys[solver.SYS_PUMP_COUPLING_CHP] = c.pump_coupling_chp
+        mix_layers = c.storage_inlet_mixing / (st.volume / st.n_layers)
+        sys[solver.SYS_ST_INLET_MIX] = mix_layers
+        n_in = 1 + math.ceil(mix_layers - 1e-12) if mix_layers > 0.0 else 1
         sys[solver.SYS_ST_TOP_LAYER] = storage.port_layer(c.storage_top_port, st)
         sys[solver.SYS_ST_BOTTOM_LAYER] = storage.port_layer(c.storage_bottom_port, st)
         self._p = tuple(pack(P[k]) for k in STATE_ORDER) + (pack(P["dhw"]), sys)
@@ -127,14 +130,17 @@ class House:
         i64 = lambda *v: np.array(v, dtype=np.int64)  # noqa: E731
         f64 = lambda n: np.zeros(n, dtype=np.float64)  # noqa: E731
         self._ports = (
-            (i64(0), i64(0)),
-            (f64(1), f64(1), f64(1), f64(1), f64(1), f64(1), f64(1), f64(1), f64(n_max),
+            (np.zeros(n_in, dtype=np.int64), i64(0)),
+            (f64(n_in), f64(n_in), f64(1), f64(1), f64(1), f64(1), f64(1), f64(1), f64(n_max),
              f64(1), f64(1), f64(1), f64(1), f64(0)),
             (i64(storage.port_layer(c.dhw_cold_port, dw)), i64(storage.port_layer(c.dhw_draw_port, dw)),
              i64(storage.port_layer(c.dhw_coil_top, dw)), i64(storage.port_layer(c.dhw_coil_bottom, dw)),
              np.zeros(0, dtype=np.int64)),
         )
         self._controller = controller
+        if spec.storage_fmu and n_in > 1:
+            raise ConfigError(f"{spec.path}: [connections] storage_inlet_mixing = {c.storage_inlet_mixing:g}: "
+                              "not with a storage FMU (its ports are one layer each); set it to 0")
         self._fmu = FmuStorage(spec.storage_fmu, st.n_layers) if spec.storage_fmu else None
         self.reset()
 

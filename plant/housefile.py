@@ -83,6 +83,7 @@ class Connections:
     dhw_soc_Tmax: float = 80.0
     idle_flow_chp: float = 0.0      # share of the consumers' flow deficit (vs the boiler) through the CHP
     pump_coupling_chp: float = 0.0  # share of the boiler flow forced through the CHP
+    storage_inlet_mixing: float = 0.0  # m3 beyond the port layer over which a storage inflow spreads
 
 
 # heating-storage FMU roles -> (causality, plant unit); T_layer is a template over the layers
@@ -279,6 +280,11 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> "HouseSpec 
             problems.append(f"{path}:{_line(text, 'connections', key)} [connections] {key}: unknown; "
                             + (f"did you mean {', '.join(close)}?" if close else f"allowed: {', '.join(sorted(conn_fields))}"))
     connections = Connections(**{k: float(v) for k, v in conn_values.items() if k in conn_fields})
+    vol = params["storage"].volume if "storage" in params else 0.8
+    if not 0.0 <= connections.storage_inlet_mixing <= 0.5 * vol:
+        problems.append(f"{path}:{_line(text, 'connections', 'storage_inlet_mixing')} [connections] "
+                        f"storage_inlet_mixing = {connections.storage_inlet_mixing:g}: must be 0 … "
+                        f"{0.5 * vol:g} m3 (half the storage volume)")
     for sec, top, bot in (("storage", "storage_top_port", "storage_bottom_port"),
                           ("dhw_storage", "dhw_draw_port", "dhw_cold_port"),
                           ("dhw_storage", "dhw_coil_top", "dhw_coil_bottom")):

@@ -45,8 +45,9 @@ LEDGER_NAMES = ("fuel_chp", "fuel_boiler", "el_chp", "el_boiler", "heat_chp", "h
 (SYS_M_DHW_PUMP, SYS_SOC_T0, SYS_SOC_TMAX, SYS_DHW_SOC_T0, SYS_DHW_SOC_TMAX, SYS_DHW_COIL_UA,
  SYS_CHP_X_STARTS, SYS_CHP_X_RUNSEC, SYS_CHP_X_EEL, SYS_CHP_X_EHEAT, SYS_CHP_X_EFUEL,
  SYS_B_X_STARTS, SYS_B_X_RUNSEC, SYS_B_X_EHEAT, SYS_B_X_EFUEL, SYS_TAU0, SYS_ST_TOP_LAYER,
- SYS_ST_BOTTOM_LAYER, SYS_B_X_Y, SYS_IDLE_FLOW_CHP, SYS_PUMP_COUPLING_CHP) = range(21)
-N_SYS = 21
+ SYS_ST_BOTTOM_LAYER, SYS_B_X_Y, SYS_IDLE_FLOW_CHP, SYS_PUMP_COUPLING_CHP,
+ SYS_ST_INLET_MIX) = range(22)
+N_SYS = 22
 
 # Signal indices as module constants S_<component>__<name> (numba freezes them at compile time;
 # a stale compiled cache after a catalogue change is caught by House's self-check).
@@ -175,6 +176,21 @@ def consumers(h, x, p, ports, T_air, E_dir, E_dif, presence, P_hh, m_draw, m_mix
 
 
 @njit(cache=True)
+def inlet(in_layer, in_m, in_T, mix_layers, n_layers, downward, port, m, T):
+    """Spread an inflow over its port layer and mix_layers further layers into the tank (an
+    inlet plume; the last one with the fractional weight), downward from the top port or upward
+    from the bottom port; in_layer has 1 + ceil(mix_layers) entries. mix_layers = 0: all of it
+    enters the port layer (bit-identical to a plain port)."""
+    n = in_layer.shape[0]
+    w_last = mix_layers - (n - 2) if n > 1 else 1.0
+    total = (n - 1) + w_last
+    for i in range(n):
+        in_layer[i] = min(port + i, n_layers - 1) if downward else max(port - i, 0)
+        in_T[i] = T
+        in_m[i] = m * (w_last if i == n - 1 else 1.0) / total
+
+
+@njit(cache=True)
 def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
     """Steps 1-5 up to the heating storage: profiles, controllers, generators, heating circuit,
     zone, DHW storage and the hydraulic-switch flows.
@@ -217,16 +233,13 @@ def before_storage(t, h, x, p, tabs, prof, ports, s, remote):
     m_gen = m_c + m_b
     m_dem = m_prim + m_dp
     m_charge, m_discharge = prescribed.split(m_gen, m_dem)
+    inlet(in_layer, in_m, in_T, p_sys[SYS_ST_INLET_MIX], T_st.shape[0], m_charge > 0.0,
+          top if m_charge > 0.0 else bottom, m_charge if m_charge > 0.0 else m_discharge,
+          T_sh if m_charge > 0.0 else T_rh)
     if m_charge > 0.0:
-        in_layer[0] = top
-        in_T[0] = T_sh
-        in_m[0] = m_charge
         out_layer[0] = bottom
         out_m[0] = m_charge
     else:
-        in_layer[0] = bottom
-        in_T[0] = T_rh
-        in_m[0] = m_discharge
         out_layer[0] = top
         out_m[0] = m_discharge
 

@@ -33,7 +33,7 @@ CASES = {
     "idle_generator_flow": ("override", "connections.idle_flow_chp", 0.25),
     "pump_coupling": ("override", "connections.pump_coupling_chp", 0.3),
     "heat_loss": ("override", "storage.UA_loss", 80.0),
-    "storage_mixing": ("override", "storage.UA_layer", 400.0),
+    "storage_mixing": ("override", "connections.storage_inlet_mixing", 0.1),
     "thermal_mass": ("override", "chp.V_water", 0.02),
     "sensor_lag": ("lag", "storage.T_sensor_10", 600.0),
     "sensor_offset": ("offset", "switch.T_ret", 1.5),

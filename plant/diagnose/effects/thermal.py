@@ -36,19 +36,26 @@ class HeaderHeatLoss(Effect):
 
 @register
 class StorageMixing(Effect):
+    """Mixing in the heating storage where it happens in a real tank: an inflow does not stay in
+    its port layer but entrains the water next to it (inlet plume), so it spreads over a volume
+    beyond the port layer (connections.storage_inlet_mixing) and the thermocline degrades at
+    every charge and discharge. (A still-water conductance, storage.UA_layer, stays nominal: it
+    mixes everywhere and always, which the recordings of an inlet plume contradict.)"""
     id = "storage_mixing"
     component = "storage"
     kind = "simulate"
-    params = (Param("UA_layer", 7.2, 5000.0, 7.2, "W/K per interface", log=True),)
-    description = ("inter-layer mixing / inlet plume in the heating storage, as an effective "
-                   "conductance between layers (storage.UA_layer; still water = 7.2 W/K)")
+    params = (Param("inlet_mixing", 0.0, 0.4, 0.0, "m3 beyond the port layer"),)
+    description = ("inlet plume / inter-layer mixing in the heating storage: each inflow spreads over "
+                   "a volume beyond its port layer (connections.storage_inlet_mixing)")
 
     def overrides(self, theta):
-        return {"storage.UA_layer": float(theta[0])}
+        return {"connections.storage_inlet_mixing": float(theta[0])}
 
     def summary(self, theta, ctx, sim=None):
-        return (f"effective inter-layer conductance {theta[0]:.0f} W/K per interface "
-                f"({theta[0] / 7.2:.0f}x still water)")
+        return f"each storage inflow spreads over {theta[0] * 1000:.0f} l beyond its port layer (nominal 0)"
+
+    def size(self, theta, ctx, sim=None):
+        return {"inlet_mixing_litres": float(theta[0]) * 1000.0}
 
 
 @register

@@ -1,0 +1,56 @@
+"""The connection knobs for effects the ideal switch leaves out (fitted by `twin diagnose`):
+flow forced through the CHP and inlet mixing in the heating storage keep the energy balance,
+do what they say, and are validated like every house-file value."""
+import numpy as np
+import pytest
+
+from plant.catalogue import CATALOGUE
+from plant.errors import ConfigError
+from plant.house import load_house
+from plant.solver import inlet
+
+DAY = 86400.0
+
+
+def test_inlet_spreads_the_flow_with_a_fractional_last_layer():
+    n = 4  # 1 + ceil(2.5)
+    layer, m, T = np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n)
+    inlet(layer, m, T, 2.5, 40, True, 0, 0.35, 70.0)
+    assert list(layer) == [0, 1, 2, 3]
+    assert np.allclose(m / m[0], [1.0, 1.0, 1.0, 0.5]) and abs(m.sum() - 0.35) < 1e-15
+    assert np.all(T == 70.0)
+    inlet(layer, m, T, 2.5, 40, False, 1, 0.35, 40.0)  # upward from the bottom port, clamped
+    assert list(layer) == [1, 0, 0, 0] and abs(m.sum() - 0.35) < 1e-15
+    one = np.zeros(1, dtype=np.int64), np.zeros(1), np.zeros(1)
+    inlet(*one, 0.0, 40, True, 0, 0.123, 60.0)
+    assert one[1][0] == 0.123  # no mixing: the whole flow, bit-identical
+
+
+def test_inlet_mixing_degrades_stratification_and_keeps_the_balance():
+    i_top, i_bot = CATALOGUE.index("storage.T_sensor_10"), CATALOGUE.index("storage.T_sensor_1")
+    spread = {}
+    for v in (0.0, 0.2):
+        h = load_house("house1", start="2021-01-10", overrides={"connections.storage_inlet_mixing": v})
+        _, rows = h.run(DAY, dt=1.0, out_interval=600.0)
+        assert h.ledger()["closure"] < 1e-9
+        spread[v] = float(np.mean(rows[:, i_top] - rows[:, i_bot]))
+    assert spread[0.2] < spread[0.0] - 1.0, spread  # top-bottom difference shrinks by > 1 K
+
+
+def test_forced_chp_flow_is_seen_by_the_branch_not_by_the_units_counter():
+    h = load_house("house1", start="2021-01-10", overrides={"connections.idle_flow_chp": 0.4})
+    _, rows = h.run(DAY, dt=1.0, out_interval=60.0)
+    assert h.ledger()["closure"] < 1e-9
+    col = {n: CATALOGUE.index(n) for n in ("chp.m_flow", "chp.m_flow_pump", "chp.Q_flow", "chp.Q_flow_meter")}
+    assert np.all(rows[:, col["chp.m_flow"]] >= rows[:, col["chp.m_flow_pump"]] - 1e-15)
+    idle_flushed = (rows[:, col["chp.m_flow_pump"]] == 0.0) & (rows[:, col["chp.m_flow"]] > 0.0)
+    assert idle_flushed.any()
+    assert np.all(rows[idle_flushed, col["chp.Q_flow_meter"]] == 0.0)
+    heat, meter = rows[:, col["chp.Q_flow"]].sum(), rows[:, col["chp.Q_flow_meter"]].sum()
+    assert meter < heat  # the unit's counter misses the heat of the flow its pump did not move
+
+
+def test_bad_inlet_mixing_names_the_key_and_the_range():
+    with pytest.raises(ConfigError) as e:
+        load_house("house1", overrides={"connections.storage_inlet_mixing": 0.6})
+    assert "storage_inlet_mixing" in str(e.value) and "half the storage volume" in str(e.value)
