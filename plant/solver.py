@@ -22,6 +22,9 @@ cheaper than keeping two copies in step.
 """
 from __future__ import annotations
 
+import math
+
+import numpy as np
 from numba import njit
 
 from profiles.loaders import sample
@@ -382,3 +385,50 @@ def after_storage(t, h, x, p, ports, s, ledger, mid, Ql_st):
     s[S_switch__T_sup] = T_sh
     s[S_switch__T_ret] = T_rh
     s[S_switch__Q_loss] = Ql_sh + Ql_rh
+
+
+@njit(cache=True)
+def minute_cut(t0, t1):
+    """The last whole minute strictly inside (t0, t1), or -1: a span is cut there because the
+    profiles (DHW draws, electricity) change on minutes and a step samples them at its start."""
+    m = math.floor(t1 / 60.0) * 60.0
+    return m if t0 + 1e-6 < m < t1 - 1e-6 else -1.0
+
+
+@njit(cache=True)
+def _span(t0, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out):
+    m = minute_cut(t0, t1)
+    a = t0
+    for b in (m, t1):
+        if b > a:
+            n = max(1, int(math.ceil((b - a) / H_MAX - 1e-9)))
+            run(n, (b - a) / n, a, x, p, tabs, prof, ports, s, remote, ledger, no_out, 0)
+            a = b
+
+
+@njit(cache=True)
+def drive(times, cmd, idx, x, p, tabs, prof, ports, s, remote, ledger, out):
+    """Drive the house through a command table from t = 0: the inputs idx hold cmd[i] from
+    sample i to i + 1 (a change is applied at the midpoint, as the samples cannot tell when it
+    happened); out[i] = the signals at times[i]. One compiled call for a whole recording."""
+    no_out = np.zeros((0, s.shape[0] + 1))
+    for j in range(idx.shape[0]):
+        s[idx[j]] = cmd[0, j]
+    if times[0] > 0.0:
+        _span(0.0, times[0], x, p, tabs, prof, ports, s, remote, ledger, no_out)
+    out[0] = s
+    for i in range(1, times.shape[0]):
+        t0, t1 = times[i - 1], times[i]
+        same = True
+        for j in range(idx.shape[0]):
+            if cmd[i - 1, j] != cmd[i, j]:
+                same = False
+        if same:
+            _span(t0, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out)
+        else:
+            tm = 0.5 * (t0 + t1)
+            _span(t0, tm, x, p, tabs, prof, ports, s, remote, ledger, no_out)
+            for j in range(idx.shape[0]):
+                s[idx[j]] = cmd[i, j]
+            _span(tm, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out)
+        out[i] = s

@@ -27,6 +27,8 @@ def register(sub) -> None:
     p.add_argument("--effects", type=Path, action="append", default=[],
                    help="Python file defining extra candidates (@register); may be repeated")
     p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--jobs", type=int, default=None,
+                   help="processes for the candidate fits (default: the CPUs available; 1 = in this process)")
     p.add_argument("--requirements", nargs="?", const="house1", metavar="HOUSE",
                    help="list the signals a recording must contain and those it can compare")
     p.set_defaults(func=run)
@@ -59,7 +61,7 @@ def run(args) -> int:
         print(f"warning: {w}", file=sys.stderr)
     rec.warnings = [f"input: {w}" for w in rec.warnings]
     rep = diagnose(rec, house=args.house, out=args.out, train_days=args.train_days,
-                   plots=not args.no_plots, log=lambda m: print(m, file=sys.stderr))
+                   plots=not args.no_plots, log=lambda m: print(m, file=sys.stderr), jobs=args.jobs)
     print(rep["finding"])
     print(f"verdict: {rep['verdict']}" + (f"  effect: {rep['effect']} ({rep['component']})" if rep["effect"] else ""))
     for k, p in rep["parameters"].items():

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import time
 
-from . import fit, locate, recording_io, replay, search  # noqa: F401
+from . import fit, locate, parallel, recording_io, replay, search  # noqa: F401
 from .context import Context
 from .effects import catalogue
 
 
 def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effects=None,
-             plots: bool = True, log=print, refit_nominal: bool = True) -> dict:
+             plots: bool = True, log=print, refit_nominal: bool = True, jobs: int | None = None) -> dict:
+    """jobs: processes for the candidate fits (default: the CPUs this process may use)."""
     timing = {}
     t0 = time.perf_counter()
     warnings = list(rec.warnings)
@@ -50,19 +51,24 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
            "mismatched_signals": affected}
     timing["locate"] = time.perf_counter() - t1
 
-    # hypothesise and fit
+    # hypothesise and fit (simulate-kind candidates in parallel processes: each is independent)
     t2 = time.perf_counter()
-    results = []
+    results, todo = [], []
     for e in (effects if effects is not None else catalogue()):
-        if not e.available:
-            results.append(fit.Result(e.id, e.component, e.kind, False, e.description, effect=e))
-            continue
-        ok, why = e.plausible(ctx)
+        ok, why = e.plausible(ctx) if e.available else (False, e.description)
         if not ok:
             results.append(fit.Result(e.id, e.component, e.kind, False, why, effect=e))
-            continue
-        r = fit.fit_simulate(e, ctx, rp, J0t, nref["params"]) if e.kind == "simulate" else fit.fit_signal(e, ctx, sim0)
-        results.append(r)
+        else:
+            results.append(None)
+            todo.append((len(results) - 1, e))
+    sims = [(i, e) for i, e in todo if e.kind == "simulate"]
+    for (i, e), r in zip(sims, parallel.fit_all([e for _, e in sims], ctx, rp, J0t, nref["params"], jobs)):
+        results[i] = r
+    for i, e in todo:
+        if e.kind != "simulate":
+            results[i] = fit.fit_signal(e, ctx, sim0)
+    for i, e in todo:
+        r = results[i]
         log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
             f"held-out cost {r.held_cost:.4g}")
     fit.judge(results, ctx, J0t, J0h)

@@ -12,8 +12,6 @@ unbiased edge time, halving the timing error of a plain sample-and-hold).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..catalogue import CATALOGUE
@@ -82,19 +80,6 @@ def check(rec) -> list[str]:
     return warnings
 
 
-def _advance(house, t0: float, t1: float) -> None:
-    """Step the house from t0 to t1, ending a step on the last whole minute inside: the profiles
-    (DHW draws, electricity) change on minutes and a step samples them at its start; without the
-    cut, a draw starting a second before a sample would be missed at that sample (a recording made
-    at 1 s steps has it)."""
-    m = math.floor(t1 / 60.0) * 60.0
-    if t0 + 1e-6 < m < t1 - 1e-6:
-        house.step(m - t0)
-        house.step(t1 - m)
-    else:
-        house.step(t1 - t0)
-
-
 class Replayer:
     """Drive the twin with a recording's commands; `run(overrides)` -> simulated rows at the samples."""
 
@@ -139,32 +124,12 @@ class Replayer:
         ov = {**self.base, **(overrides or {})}
         house = load_house(self.house_name, start=self.rec.start, controller="external",
                            overrides=ov or None)
-        t, cmd, idx = self.t, self.cmd, self.idx
-        n = len(t) if until is None else int(np.searchsorted(t, until, side="right"))
-        out = np.empty((n, len(CATALOGUE)))
-        s = house._s  # inputs are written directly (validated once above; hot loop)
-        remote = house._remote
-        for j in idx:
-            remote[j] = True
-        s[idx] = cmd[0]
+        n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         if self.init_from_sensors:
+            house._remote[self.idx] = True
+            house._s[self.idx] = self.cmd[0]
             self._init_storage(house)
-            s[idx] = cmd[0]
-        if t[0] > 0:
-            _advance(house, 0.0, float(t[0]))
-        out[0] = s
-        for i in range(1, n):
-            t0, t1 = float(t[i - 1]), float(t[i])
-            a, b = cmd[i - 1], cmd[i]
-            if np.array_equal(a, b):
-                s[idx] = b
-                _advance(house, t0, t1)
-            else:
-                s[idx] = a
-                _advance(house, t0, 0.5 * (t0 + t1))
-                s[idx] = b
-                _advance(house, 0.5 * (t0 + t1), t1)
-            out[i] = s
+        out = house.drive(self.t[:n], COMMANDS, self.cmd[:n])
         self._checked = True
         return out
 
