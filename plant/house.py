@@ -36,6 +36,8 @@ from .controllers import room_thermostat, rule_based
 from .errors import ConfigError
 from .water import CP, RHO
 
+_INPUT_NAMES = tuple(s.name for s in CATALOGUE.inputs())  # named in the error for a non-input
+
 if TYPE_CHECKING:  # a house whose plant is an FMU (topology = "fmu")
     from .fmu.house import FmuHouse
 
@@ -191,7 +193,7 @@ class House:
 
     def set(self, name: str, value: float) -> None:
         sig = CATALOGUE.signal(name)
-        self._s[sig.index] = sig.input_value(value, [s.name for s in CATALOGUE.inputs()])
+        self._s[sig.index] = sig.input_value(value, _INPUT_NAMES)
         self._remote[sig.index] = True
 
     def release(self, name: str) -> None:

@@ -67,6 +67,11 @@ def _action(device: Device, transport: str):
                 refusal = device.write_registers(table, address, [int(v) for v in values],
                                                  client, transport)
                 return ExcCodes(refusal.modbus_code) if refusal else None
+            if fc == 6 and pdu is not None and getattr(pdu, "registers", None):
+                # pymodbus reads an FC6 write back for its echo: answer with what was written
+                # and accepted (a Device read would re-encode the table the write just changed)
+                registers[address - start] = int(pdu.registers[0])
+                return None
             if table in BIT_TABLES:
                 # pymodbus passes the number of 16-bit words; the request holds the bit count.
                 n = getattr(pdu, "count", 0) if pdu is not None and fc in (1, 2) else 1

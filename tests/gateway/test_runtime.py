@@ -33,7 +33,8 @@ def runtime(tmp_path):
 
 def test_recording_holds_signals_writes_refusals_watchdog_and_faults(runtime, tmp_path):
     rt, client = runtime
-    assert not client.write_register(200, 1000, device_id=BOILER).isError()  # 10.00 V demand
+    ok = client.write_register(200, 1000, device_id=BOILER)  # 10.00 V demand
+    assert not ok.isError() and ok.address == 200 and ok.registers == [1000]  # the FC6 echo
     bad = client.write_register(200, 1500, device_id=BOILER)  # 15 V: above the 0-10 V range
     assert bad.isError() and bad.exception_code == 3
     rt.clock.step(120)
