@@ -6,6 +6,11 @@ fills registers from the Device on reads and passes writes to the Device, return
 member for a Refusal. Subclassing datablocks is ignored by pymodbus 3.16, so live values must
 come through `action`.
 
+The three requests a PLC sends every scan (FC3/FC4 register reads, FC6 single write) are
+answered in the request handler straight from the Device (`_direct`): the same Device calls, but
+without the simulator's per-register checks and the action coroutine, which cost a fifth of a
+loopback round trip. Everything else goes through the simulator and `action`.
+
 Two things pymodbus cannot do through `action` are done in a request-handler subclass:
   * per-request context (client address, the real bit count of coil reads) and the per-device
     function-code whitelist, checked before pymodbus touches the datastore;
@@ -26,6 +31,8 @@ from pymodbus.constants import ExcCodes
 from pymodbus.framer import FramerType
 from pymodbus.pdu import ExceptionResponse
 from pymodbus.pdu.mei_message import ReadDeviceInformationRequest, ReadDeviceInformationResponse
+from pymodbus.pdu.register_message import (ReadHoldingRegistersResponse, ReadInputRegistersResponse,
+                                           WriteSingleRegisterResponse)
 from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.server.requesthandler import ServerRequestHandler
 from pymodbus.simulator import DataType, SimData, SimDevice
@@ -67,11 +74,6 @@ def _action(device: Device, transport: str):
                 refusal = device.write_registers(table, address, [int(v) for v in values],
                                                  client, transport)
                 return ExcCodes(refusal.modbus_code) if refusal else None
-            if fc == 6 and pdu is not None and getattr(pdu, "registers", None):
-                # pymodbus reads an FC6 write back for its echo: answer with what was written
-                # and accepted (a Device read would re-encode the table the write just changed)
-                registers[address - start] = int(pdu.registers[0])
-                return None
             if table in BIT_TABLES:
                 # pymodbus passes the number of 16-bit words; the request holds the bit count.
                 n = getattr(pdu, "count", 0) if pdu is not None and fc in (1, 2) else 1
@@ -149,6 +151,10 @@ class _Handler(ServerRequestHandler):
             # counted by the controller audit (poll rates); the recorder does not log them
             device.report({"kind": "request", "transport": gw.gw_name, "client": client,
                            "fc": pdu.function_code})
+            direct = _direct(device, pdu, client, gw.gw_name)
+            if direct is not None:
+                self._send(direct, pdu)
+                return
             token = _REQUEST.set((device, pdu, client))
             try:
                 await super().handle_request()
@@ -166,6 +172,34 @@ class _Handler(ServerRequestHandler):
         if self._corrupt and data:
             data = data[:-1] + bytes([data[-1] ^ 0xFF])  # last CRC byte flipped
         super().send(data, addr)
+
+
+def _direct(device: Device, pdu: Any, client: str, transport: str) -> Any:
+    """The answer to a register read (FC3/FC4) or single-register write (FC6), straight from the
+    Device: the three requests a PLC sends every scan, so they skip the simulator datastore's
+    per-register checks and the action coroutine (the same Device calls and refusals as `action`;
+    pymodbus has already checked the count when decoding). None: not one of them."""
+    fc = pdu.function_code
+    try:
+        if fc in (3, 4):
+            result = device.read_registers(FC_TABLE[fc], pdu.address, pdu.count)
+            if not isinstance(result, list):
+                return ExceptionResponse(fc, ExcCodes(result.modbus_code))
+            return (ReadHoldingRegistersResponse if fc == 3 else ReadInputRegistersResponse)(
+                registers=result, dev_id=pdu.dev_id, transaction_id=pdu.transaction_id)
+        if fc == 6:
+            value = int(pdu.registers[0])
+            if not 0 <= value <= 0xFFFF:
+                return ExceptionResponse(fc, ExcCodes.ILLEGAL_VALUE)
+            refusal = device.write_registers("holding", pdu.address, [value], client, transport)
+            if refusal:
+                return ExceptionResponse(fc, ExcCodes(refusal.modbus_code))
+            return WriteSingleRegisterResponse(address=pdu.address, registers=[value],
+                                               dev_id=pdu.dev_id, transaction_id=pdu.transaction_id)
+    except Exception:  # server-loop boundary: log, answer 04, keep serving
+        log.exception("%s: request failed", device.id)
+        return ExceptionResponse(fc, ExcCodes.DEVICE_FAILURE)
+    return None
 
 
 def _identification(device: Device, pdu: Any) -> Any:
