@@ -5,12 +5,14 @@ others, so they are spread over the CPUs (2 on the reference machine: the 7-day 
 about half the wall time). The workers are forked, so they inherit the recording, the replayer
 and any user candidates registered at run time (`--effects`) without pickling them; a result
 comes back without its effect object, which the parent re-attaches. Where fork is unavailable
-or jobs = 1, the fits run in this process, in order; results are the same either way.
+or jobs = 1, or other threads run in this process (they would not exist in a forked child while
+their locks might), the fits run in this process, in order; results are the same either way.
 """
 from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
 from concurrent.futures import ProcessPoolExecutor
 
 from . import fit
@@ -35,7 +37,9 @@ def default_jobs() -> int:
 def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
     """fit.fit_simulate for each effect; in up to `jobs` forked processes."""
     jobs = min(default_jobs() if jobs is None else max(1, int(jobs)), len(effects))
-    if jobs <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+    # fork copies only the calling thread: with other threads alive (a gateway in the same
+    # process) a lock they hold could never be released in the child, so fit here instead
+    if jobs <= 1 or "fork" not in multiprocessing.get_all_start_methods() or threading.active_count() > 1:
         return [fit.fit_simulate(e, ctx, rp, J0t, nominal) for e in effects]
     _JOB.update(effects=effects, ctx=ctx, rp=rp, J0t=J0t, nominal=nominal)
     try:

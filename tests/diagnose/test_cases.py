@@ -141,6 +141,31 @@ def test_effect_outside_the_catalogue_is_unexplained_not_misnamed():
     assert terms and "unexplained mismatch" in rep["finding"]
 
 
+def test_candidates_the_sensors_cannot_tell_apart_are_reported_as_such():
+    # a user candidate that moves the same knob as heat_loss under another name: whichever is
+    # named, the other must be listed as indistinguishable, not silently dropped
+    @register
+    class InsulationDamage(Effect):
+        id = "insulation_damage_test"
+        component = "storage"
+        kind = "simulate"
+        params = (Param("UA", 2.0, 400.0, 20.0, "W/K", log=True),)
+
+        def overrides(self, theta):
+            return {"storage.UA_loss": float(theta[0])}
+
+    try:
+        rec = synth.make("heat_loss", 80.0, days=1.2)
+        effects = [e for e in catalogue() if e.id in ("insulation_damage_test", "heat_loss")]
+        rep = diagnose(rec, train_days=0.5, effects=effects, log=quiet, plots=False, refit_nominal=False)
+        assert rep["verdict"] == "missing_physics", rep["finding"]
+        other = ({"heat_loss", "insulation_damage_test"} - {rep["effect"]}).pop()
+        assert rep["indistinguishable_from"] == [other]
+        assert "cannot tell it apart" in rep["finding"]
+    finally:
+        REGISTRY.pop("insulation_damage_test", None)
+
+
 def test_user_effect_plugs_in():
     @register
     class RadiatorSize(Effect):
