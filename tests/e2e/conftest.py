@@ -28,7 +28,7 @@ DAY = 86400
 # 8,640 scans of 4 Modbus transactions and each example took 28-33 s wall (measured), over the
 # 30 s budget per test; at 10 s the heat per generator matched the offline run equally well.
 SCAN = 20
-# Recorder row interval [s]. At 1 s, writing 86,400 rows of 88 signals was ~5 s of each test;
+# Recorder row interval [s]. At 1 s, writing 86,400 rows of ~90 signals was ~5 s of each test;
 # at 10 s the rows are t = 1, 11, 21 ... (the recorder's first row is the first step), and the
 # offline reference is sampled at exactly those instants, so both KPIs see the same samples.
 RECORD = 10
