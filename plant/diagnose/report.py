@@ -224,7 +224,8 @@ def write(rep, out, ctx, nominal_rows, best, plots=True) -> None:
                      f"{f(d['heldout_rmse_after'])} |")
     lines += ["", "energy [kWh]:"]
     for c, d in rep["energy"].items():
-        lines.append(f"  {c}: " + ", ".join(f"{k} {v:.3g}" for k, v in d.items() if isinstance(v, float)))
+        via = f" ({d['signal']})" if d.get("signal") else ""
+        lines.append(f"  {c}{via}: " + ", ".join(f"{k} {v:.3g}" for k, v in d.items() if isinstance(v, float)))
     if rep["warnings"]:
         lines += ["", "warnings:"] + [f"  - {w}" for w in rep["warnings"]]
     (out / "report.md").write_text("\n".join(lines) + "\n")
