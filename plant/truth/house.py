@@ -3,12 +3,12 @@
     from plant.truth import load_truth
     truth = load_truth("house1", start="2021-01-10", network={"k_chp": 12000.0},
                        storage_layers=80, inlet_mixing_layers=2, sensor_lag={10: 120.0})
-    truth.step(60.0); truth.get("chp.T_sup"); truth.aux("chp.m_flow"); truth.ledger()
+    truth.step(60.0); truth.get("chp.T_sup"); truth.aux("chp.m_flow_forced"); truth.ledger()
 
 Same public API as plant.house.House (get/set/release/step/run/ledger/snapshot/restore; the
 signal catalogue is the twin's), plus `aux(name)` for quantities the twin does not have
-(`AUX_NAMES` in plant/truth/solver.py: the CHP's own pump flow, the flow the network forces
-through the CHP, link/CHP-line/storage flows, node pressures, the CHP heat meter reading, ...).
+(`AUX_NAMES` in plant/truth/solver.py: the flow the network forces through the CHP,
+link/CHP-line/storage flows, node pressures, pump speeds, ...).
 Not for controllers under test: it exists to generate lab-like recordings whose physics differs
 from the twin in known, documented ways (plant/truth/recording.py).
 """

@@ -96,8 +96,8 @@ NOISE = {"T": (0.07, 0.1), "Tair": (0.1, 0.1), "flow": (0.01, 0.1), "power": (0.
 FMT = {"cmd": "%.6g", "T": "%.1f", "Tair": "%.1f", "flow": "%.1f", "power": "%.2f"}
 GZIP_ABOVE = 2_000_000  # bytes
 # the true (noise-free) quantities logged in meta.json / used for effect sizes
-TRUTH_AUX = ("chp.mode", "chp.T_sup", "chp.T_ret", "chp.m_flow", "chp.m_flow_pump", "mixer.m_flow_primary", "mixer.m_flow", "chp.on",
-             "chp.Q_flow_true", "chp.Q_flow_meter", "boiler.m_flow", "dhw_pump.m_flow")
+TRUTH_AUX = ("chp.mode", "chp.T_sup", "chp.T_ret", "chp.m_flow", "chp.m_flow_pump", "mixer.m_flow_primary",
+             "mixer.m_flow", "chp.on", "chp.Q_flow", "chp.Q_flow_meter", "boiler.m_flow", "dhw_pump.m_flow")
 
 
 def _to_unit(value: np.ndarray, unit: str) -> np.ndarray:
@@ -185,16 +185,7 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
         s = house.values()
         rows[k] = [s[idx[c]] for c in cols]
         for key in TRUTH_AUX:
-            if key in idx:
-                truth[key][k] = s[idx[key]]
-        if is_truth:
-            truth["chp.m_flow_pump"][k] = house.aux("chp.m_flow_pump")
-            truth["chp.Q_flow_true"][k] = house.aux("chp.Q_flow_true")
-            truth["chp.Q_flow_meter"][k] = house.aux("chp.Q_flow_meter")
-        else:
-            truth["chp.m_flow_pump"][k] = s[idx["chp.m_flow"]]
-            truth["chp.Q_flow_true"][k] = s[idx["chp.Q_flow"]]
-            truth["chp.Q_flow_meter"][k] = s[idx["chp.Q_flow"]]
+            truth[key][k] = s[idx[key]]
     wall = _time.perf_counter() - wall
     ledger = house.ledger()
     effect = effect_sizes(truth, sample)
@@ -292,7 +283,7 @@ def effect_sizes(truth: dict, sample: float) -> dict:
         e["idle_chp_share_of_heating_circuit_flow"] = float(m.sum() / truth["mixer.m_flow"][heat].sum())
         e["idle_samples_with_heating"] = int(heat.sum())
     if both.any():
-        ideal = truth["chp.Q_flow_true"][both] / (4180.0 * np.maximum(80.0 - truth["chp.T_ret"][both], 1.0))
+        ideal = truth["chp.Q_flow"][both] / (4180.0 * np.maximum(80.0 - truth["chp.T_ret"][both], 1.0))
         e["chp_flow_mean_chp_and_boiler_running_kg_s"] = float(truth["chp.m_flow"][both].mean())
         e["chp_ideal_flow_80degC_same_heat_kg_s"] = float(ideal.mean())
         e["suction_chp_flow_over_ideal_flow"] = float(truth["chp.m_flow"][both].sum() / max(ideal.sum(), 1e-12))
@@ -302,7 +293,7 @@ def effect_sizes(truth: dict, sample: float) -> dict:
             if (on & (mode > 2.5)).any() else float("nan")
         e["chp_own_pump_share_of_chp_flow_running"] = float(
             truth["chp.m_flow_pump"][on].sum() / max(truth["chp.m_flow"][on].sum(), 1e-12))
-    e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow_true"].sum() * sample / 3.6e6)
+    e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow"].sum() * sample / 3.6e6)
     e["chp_running_hours"] = float(on.sum() * sample / 3600.0)
     return e
 

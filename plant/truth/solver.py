@@ -53,18 +53,17 @@ I_ST_S1, I_DHW_S1 = _I["storage.T_sensor_1"], _I["dhw_storage.T_sensor_1"]
 # truth state/diagnostics vector x_tr
 (XT_TJ, XT_PS, XT_PJ) = range(3)
 XT_LAG0 = 3  # 10 lagged storage sensor values (1 = bottom)
-(XT_M_PUMP_CHP, XT_M_FORCED_CHP, XT_M_LINK, XT_M_CHP_LINE, XT_M_STORAGE, XT_T_BOILER_IN,
- XT_Q_CHP_METER, XT_Q_CHP_TRUE, XT_N_CHP, XT_N_BOILER, XT_RES, XT_ITER, XT_P_S, XT_P_J,
- XT_Q_LINE_METER) = range(13, 28)
-N_XT = 28
+# (the CHP's own pump flow and heat counter are catalogue signals: chp.m_flow_pump, chp.Q_flow_meter)
+(XT_M_FORCED_CHP, XT_M_LINK, XT_M_CHP_LINE, XT_M_STORAGE, XT_T_BOILER_IN,
+ XT_N_CHP, XT_N_BOILER, XT_RES, XT_ITER, XT_P_S, XT_P_J) = range(13, 24)
+N_XT = 24
 AUX_NAMES = {
-    "chp.m_flow_pump": XT_M_PUMP_CHP, "chp.m_flow_forced": XT_M_FORCED_CHP,
+    "chp.m_flow_forced": XT_M_FORCED_CHP,
     "network.m_flow_link": XT_M_LINK, "network.m_flow_chp_line": XT_M_CHP_LINE,
     "network.m_flow_storage": XT_M_STORAGE, "boiler.T_in": XT_T_BOILER_IN,
-    "chp.Q_flow_meter": XT_Q_CHP_METER, "chp.Q_flow_true": XT_Q_CHP_TRUE,
     "chp.pump_speed": XT_N_CHP, "boiler.pump_speed": XT_N_BOILER,
     "network.residual": XT_RES, "network.iterations": XT_ITER,
-    "network.p_S": XT_P_S, "network.p_J": XT_P_J, "chp.Q_flow_line_meter": XT_Q_LINE_METER,
+    "network.p_S": XT_P_S, "network.p_J": XT_P_J,
 }
 # truth parameters p_tr
 PT_NMIX = 0
@@ -208,15 +207,11 @@ def run(n, h, t0, x, p, tabs, prof, ports, s, remote, ledger, out, rec_every):
         ledger[L_DHW_MISSING] += Q_miss * h
 
         T_c_sensor = T_c if m_c > 0.0 else x_chp[chp.X_TW]
-        x_tr[XT_M_PUMP_CHP] = m_pump
         x_tr[XT_M_FORCED_CHP] = m_forced
         x_tr[XT_M_LINK] = m_link
         x_tr[XT_M_CHP_LINE] = m_line
         x_tr[XT_M_STORAGE] = m_discharge - m_charge
         x_tr[XT_T_BOILER_IN] = T_b_in
-        x_tr[XT_Q_CHP_METER] = m_pump * CP * (T_c_sensor - T_rh)
-        x_tr[XT_Q_CHP_TRUE] = m_c * CP * (T_c - T_rh)
-        x_tr[XT_Q_LINE_METER] = m_c * CP * (T_c - T_rh)
         x_tr[XT_N_CHP] = net.pump_speed(m_pump, x_tr[XT_PS], p_net[net.CHP_PUMP_H0], 0.0,
                                         p_net[net.K_CHP] + p_net[net.K_CHP_LINE])
         x_tr[XT_N_BOILER] = net.pump_speed(m_b, x_tr[XT_PS], p_net[net.BOILER_PUMP_H0],
