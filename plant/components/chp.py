@@ -102,10 +102,10 @@ P_EL_MAX, M_MIN, ETA_EL_MAX, ETA_EL_MIN, ETA_TOT_MAX, P_HEATUP, T_START_COLD, T_
 T_STEADY, T_AMB, T_STOP, T_SUP_SET, T_RET_MAX, T_RET_MIN, P_IDLE, SLEW = range(8, 16)
 V_WATER, M_PUMP_MAX, TAU_PUMP, INITIAL_DOWNTIME, T_W0 = range(16, 21)
 
-STATES = ("y", "T_w", "t_on", "t_off", "running", "m_last", "m_stop", "f0", "t_start",
-          "starts", "run_seconds", "E_fuel", "E_el", "E_heat", "m_pump")
-X_Y, X_TW, X_TON, X_TOFF, X_RUN, X_MLAST, X_MSTOP, X_F0, X_TSTART = range(9)
-X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT, X_MPUMP = range(9, 15)
+STATES = ("y", "T_w", "t_on", "t_off", "running", "m_pump", "m_stop", "f0", "t_start",
+          "starts", "run_seconds", "E_fuel", "E_el", "E_heat")
+X_Y, X_TW, X_TON, X_TOFF, X_RUN, X_MPUMP, X_MSTOP, X_F0, X_TSTART = range(9)
+X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT = range(9, 14)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -153,7 +153,7 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
     elif (not on_eff) and x[X_RUN] > 0.5:
         x[X_RUN] = 0.0
         x[X_TOFF] = t
-        x[X_MSTOP] = x[X_MLAST]
+        x[X_MSTOP] = x[X_MPUMP]  # the pump flow of the last running step
     m_pump = 0.0
     P_el = 0.0
     P_fuel = 0.0
@@ -224,7 +224,6 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
                 tc = max(p[TAU_PUMP], 3.0 * dt)
                 m_pump = P_heat / (CP * dTs) + C * (Tw - T_tgt) / (CP * dTs * tc)
                 m_pump = min(p[M_PUMP_MAX], max(0.0, m_pump))
-        x[X_MLAST] = m_pump
         x[X_RUNSEC] += dt
     else:
         dy = -x[X_Y]

@@ -32,7 +32,7 @@ def test_indices_match_field_order():
     for name, i in idx.items():
         assert getattr(chp, name.upper()) == i, name
     assert chp.STATES[chp.X_TW] == "T_w" and chp.STATES[chp.X_EHEAT] == "E_heat"
-    assert len(chp.STATES) == 15
+    assert len(chp.STATES) == 14
 
 
 def test_bad_param_is_reported_with_key_and_range():
@@ -173,7 +173,7 @@ def test_internal_pump_holds_80(dt):
 def test_cool_down_follows_table():
     P, p, x = make()
     t, r = run(x, p, 0.0, 3000, 1.0, T_in=40.0)
-    m_stop = x[chp.X_MLAST]
+    m_stop = x[chp.X_MPUMP]
     assert m_stop == pytest.approx(4762.0 / (CP * 40.0), rel=0.01)
     t_off = t
     t, rec = run(x, p, t, 100, 1.0, on=0.0, T_in=40.0, record=True)
