@@ -236,31 +236,20 @@ class House:
                          self._s, self._remote, self._ledger, out)
             self.t = float(times[-1])
             return out
-        # a storage FMU steps from Python: the same schedule, one span at a time
-        def span(t0, t1):
-            m = solver.minute_cut(t0, t1)
-            for a, b in ((t0, m), (m, t1)) if m > 0 else ((t0, t1),):
-                self._advance(b - a, max(1, math.ceil((b - a) / solver.H_MAX - 1e-9)))
-        self._s[idx] = cmd[0]
-        if times[0] > 0:
-            span(0.0, float(times[0]))
-        out[0] = self._s
-        for i in range(1, len(times)):
-            t0, t1 = float(times[i - 1]), float(times[i])
-            if np.array_equal(cmd[i - 1], cmd[i]):
-                span(t0, t1)
-            else:
-                span(t0, 0.5 * (t0 + t1))
-                self._s[idx] = cmd[i]
-                span(0.5 * (t0 + t1), t1)
-            out[i] = self._s
+        # a storage FMU steps from Python: the same plan, one span at a time
+        for a, b, row, rec in solver.drive_plan(times, cmd):
+            self._s[idx] = cmd[int(row)]
+            if b > a:
+                self._advance(b - a, solver.n_steps(b - a))
+            if rec >= 0:
+                out[int(rec)] = self._s
         return out
 
     def step(self, dt: float) -> None:
         """Advance by dt seconds (split into equal internal steps of at most 5 s)."""
         if not dt > 0 or not math.isfinite(dt):
             raise ValueError(f"step: dt = {dt}; must be a positive number of seconds")
-        self._advance(dt, max(1, math.ceil(dt / solver.H_MAX - 1e-9)))
+        self._advance(dt, solver.n_steps(dt))
 
     def run(self, duration: float, dt: float = 1.0, out_interval: float = 60.0, progress=None):
         """Simulate `duration` seconds at step dt; returns (times [s], rows [n, signals]).
@@ -270,7 +259,7 @@ class House:
         """
         if not dt > 0:
             raise ValueError(f"run: dt = {dt}; must be positive")
-        sub = max(1, math.ceil(dt / solver.H_MAX - 1e-9))
+        sub = solver.n_steps(dt)
         h = dt / sub
         rec_every = max(1, int(round(out_interval / h)))
         if abs(rec_every * h - out_interval) > 1e-6 * out_interval:

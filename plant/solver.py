@@ -388,47 +388,59 @@ def after_storage(t, h, x, p, ports, s, ledger, mid, Ql_st):
 
 
 @njit(cache=True)
-def minute_cut(t0, t1):
-    """The last whole minute strictly inside (t0, t1), or -1: a span is cut there because the
-    profiles (DHW draws, electricity) change on minutes and a step samples them at its start."""
-    m = math.floor(t1 / 60.0) * 60.0
-    return m if t0 + 1e-6 < m < t1 - 1e-6 else -1.0
+def n_steps(dt):
+    """Internal steps for a span of dt seconds: equal steps of at most H_MAX."""
+    return max(1, int(math.ceil(dt / H_MAX - 1e-9)))
 
 
 @njit(cache=True)
-def _span(t0, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out):
-    m = minute_cut(t0, t1)
-    a = t0
-    for b in (m, t1):
-        if b > a:
-            n = max(1, int(math.ceil((b - a) / H_MAX - 1e-9)))
-            run(n, (b - a) / n, a, x, p, tabs, prof, ports, s, remote, ledger, no_out, 0)
-            a = b
+def _plan_span(plan, k, a, b, row, rec):
+    """Append the span a..b (commands of `row`, sample `rec` recorded at its end, -1: none),
+    cut at the last whole minute inside: the profiles (DHW draws, electricity) change on minutes
+    and a step samples them at its start."""
+    m = math.floor(b / 60.0) * 60.0
+    if a + 1e-6 < m < b - 1e-6:
+        plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, m, row, -1
+        k += 1
+        a = m
+    plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, b, row, rec
+    return k + 1
+
+
+@njit(cache=True)
+def drive_plan(times, cmd):
+    """The spans [t0, t1, command row, recorded sample or -1] that replay a command table from
+    t = 0: row i holds from sample i to i + 1, a change is applied at the midpoint (the samples
+    cannot tell when it happened). One plan for the compiled and the Python-stepped drive."""
+    n = times.shape[0]
+    plan = np.empty((4 * n, 4))
+    k = _plan_span(plan, 0, 0.0, times[0], 0, 0)
+    for i in range(1, n):
+        t0, t1 = times[i - 1], times[i]
+        same = True
+        for j in range(cmd.shape[1]):
+            if cmd[i - 1, j] != cmd[i, j]:
+                same = False
+        if same:
+            k = _plan_span(plan, k, t0, t1, i, i)
+        else:
+            tm = 0.5 * (t0 + t1)
+            k = _plan_span(plan, k, t0, tm, i - 1, -1)
+            k = _plan_span(plan, k, tm, t1, i, i)
+    return plan[:k]
 
 
 @njit(cache=True)
 def drive(times, cmd, idx, x, p, tabs, prof, ports, s, remote, ledger, out):
-    """Drive the house through a command table from t = 0: the inputs idx hold cmd[i] from
-    sample i to i + 1 (a change is applied at the midpoint, as the samples cannot tell when it
-    happened); out[i] = the signals at times[i]. One compiled call for a whole recording."""
+    """Drive the house through a command table (drive_plan); out[i] = the signals at times[i].
+    One compiled call for a whole recording."""
     no_out = np.zeros((0, s.shape[0] + 1))
-    for j in range(idx.shape[0]):
-        s[idx[j]] = cmd[0, j]
-    if times[0] > 0.0:
-        _span(0.0, times[0], x, p, tabs, prof, ports, s, remote, ledger, no_out)
-    out[0] = s
-    for i in range(1, times.shape[0]):
-        t0, t1 = times[i - 1], times[i]
-        same = True
+    for seg in drive_plan(times, cmd):
+        a, b, row, rec = seg[0], seg[1], int(seg[2]), int(seg[3])
         for j in range(idx.shape[0]):
-            if cmd[i - 1, j] != cmd[i, j]:
-                same = False
-        if same:
-            _span(t0, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out)
-        else:
-            tm = 0.5 * (t0 + t1)
-            _span(t0, tm, x, p, tabs, prof, ports, s, remote, ledger, no_out)
-            for j in range(idx.shape[0]):
-                s[idx[j]] = cmd[i, j]
-            _span(tm, t1, x, p, tabs, prof, ports, s, remote, ledger, no_out)
-        out[i] = s
+            s[idx[j]] = cmd[row, j]
+        if b > a:
+            n = n_steps(b - a)
+            run(n, (b - a) / n, a, x, p, tabs, prof, ports, s, remote, ledger, no_out, 0)
+        if rec >= 0:
+            out[rec] = s
