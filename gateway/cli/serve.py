@@ -51,11 +51,14 @@ def register(sub) -> None:
     p.add_argument("--fault", action="append", default=[], metavar="DEV:KIND[:POINT[:DELTA]]@T",
                    help="inject a fault at simulated time T (repeatable)")
     p.add_argument("--scenario", help="fault scenario TOML file")
+    p.add_argument("--loop", choices=("auto", "asyncio", "uvloop"), default="auto",
+                   help="event loop of the servers (default auto: uvloop if installed, see the 'fast' extra)")
     p.set_defaults(func=serve)
 
 
 def serve(args) -> int:
     from gateway.clock import LockStepClock, PacedClock
+    from gateway.event_loop import install
     from gateway.faults import load_scenario, parse_cli
     from gateway.runtime import Runtime
     from plant.house import load_house
@@ -77,6 +80,7 @@ def serve(args) -> int:
     if args.scenario:
         faults += load_scenario(args.scenario, rt.devices)
     rt.schedule(faults)
+    loop = install(args.loop)
     if args.modbus_tcp:
         tcp = rt.add_modbus_tcp(*args.modbus_tcp, allow=args.allow)
     if args.modbus_rtu:
@@ -95,7 +99,8 @@ def serve(args) -> int:
         where.append(f"canopen {args.can}")
     units = ", ".join(f"{d.id}=unit {d.unit_id}/node {d.map.canopen.node_id}" for d in rt.devices.values())
     print(f"serving {house.name} ({clock.mode}, dt {args.dt:g} s"
-          f"{'' if args.lock_step else f', {args.speed:g}x'}) on {'; '.join(where)}", flush=True)
+          f"{'' if args.lock_step else f', {args.speed:g}x'}, event loop {loop}) on {'; '.join(where)}",
+          flush=True)
     print(f"devices: {units}", flush=True)
     try:
         if args.lock_step:
