@@ -1,7 +1,8 @@
 """Controller audit: how each client behaved — polling, watchdog refreshes, refusals, link loss.
 
 Fed with the devices' event stream (writes, refusals, watchdog transitions, link events) and
-with request events from the transports (kind "request"). Times are gateway-clock seconds, so a
+with request events from the transports (kind "request"), and with malformed-frame counts and
+refused or idle-closed connections (kinds "malformed" and "link") from the Modbus TCP server. Times are gateway-clock seconds, so a
 lock-step test gets the same report every time.
 """
 from __future__ import annotations
@@ -23,6 +24,7 @@ class Audit:
         self.expiries: list[tuple[float, str]] = []  # (t, device)
         self.recoveries: list[tuple[str, float]] = []  # (device, seconds until next accepted write)
         self.link: Counter = Counter()
+        self.malformed: dict[str, Counter] = defaultdict(Counter)  # client -> kind -> frames
 
     def event(self, ev: dict[str, Any]) -> None:
         kind = ev.get("kind")
@@ -47,6 +49,8 @@ class Audit:
                 self.expiries.append((t, ev.get("device", "")))
             elif kind == "link":
                 self.link[f"{client} {ev.get('event', '')}"] += 1
+            elif kind == "malformed":
+                self.malformed[client][ev.get("reason", "?")] += 1
 
     def report(self) -> dict[str, Any]:
         with self._lock:
@@ -70,6 +74,7 @@ class Audit:
             out["watchdog_expiries_open"] = [{"t": t, "device": d} for t, d in self.expiries]
             out["recoveries_after_expiry"] = [{"device": d, "seconds": s} for d, s in self.recoveries]
             out["link_events"] = dict(self.link)
+            out["malformed_frames"] = {c: dict(k) for c, k in self.malformed.items()}
             return out
 
     def text(self) -> str:
@@ -88,4 +93,7 @@ class Audit:
             lines.append(f"  {e['device']}: controller resumed {e['seconds']:.0f} s after the watchdog expired")
         for k, n in r["link_events"].items():
             lines.append(f"  link: {k} x{n}")
+        for c, kinds in r["malformed_frames"].items():
+            lines.append(f"  malformed frames from {c}: {sum(kinds.values())} ("
+                         + ", ".join(f"{k} x{n}" for k, n in sorted(kinds.items())) + ")")
         return "\n".join(lines)

@@ -68,8 +68,12 @@ class Runtime:
         if self.recorder:
             self.recorder.event(ev)
 
-    def add_modbus_tcp(self, host: str = "127.0.0.1", port: int = 5020, allow=None):
-        tr = transport_class("modbus-tcp")(self.devices.values(), host=host, port=port, allow=allow)
+    def add_modbus_tcp(self, host: str = "127.0.0.1", port: int = 5020, allow=None,
+                       max_connections: int = 64, idle_timeout: float = 60.0):
+        # malformed frames and refused connections go to the audit only: a flood must not fill events.csv
+        tr = transport_class("modbus-tcp")(self.devices.values(), host=host, port=port, allow=allow,
+                                           max_connections=max_connections, idle_timeout=idle_timeout,
+                                           on_event=self.audit.event)
         self.transports.append(tr)
         return tr
 

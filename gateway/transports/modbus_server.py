@@ -15,7 +15,9 @@ Two things pymodbus cannot do through `action` are done in a request-handler sub
   * per-request context (client address, the real bit count of coil reads) and the per-device
     function-code whitelist, checked before pymodbus touches the datastore;
   * link faults (silent, late, dropped connection, corrupted RTU CRC), the per-device FC43/14
-    identification (pymodbus keeps one global identity), and silence for unknown unit ids.
+    identification (pymodbus keeps one global identity), and silence for unknown unit ids;
+  * limits (connections beyond `max_connections` closed at once, silent ones after `idle_timeout`)
+    and malformed frames, counted and consumed one by one before pymodbus sees them (TrafficLog).
 The server loop runs in its own thread; Device calls are thread-safe.
 """
 from __future__ import annotations
@@ -24,11 +26,12 @@ import asyncio
 import contextvars
 import logging
 import threading
-from collections.abc import Iterable
+import time
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from pymodbus.constants import ExcCodes
-from pymodbus.framer import FramerType
+from pymodbus.framer import FramerRTU, FramerType
 from pymodbus.pdu import ExceptionResponse
 from pymodbus.pdu.mei_message import ReadDeviceInformationRequest, ReadDeviceInformationResponse
 from pymodbus.pdu.register_message import (ReadHoldingRegistersResponse, ReadInputRegistersResponse,
@@ -39,6 +42,7 @@ from pymodbus.simulator import DataType, SimData, SimDevice
 
 from gateway.device.device import FC_TABLE, Device
 from gateway.maps.model import BIT_TABLES, TABLES
+from gateway.transports.traffic_log import TrafficLog, mbap_frame, quiet_pymodbus
 from plant.errors import TransportError
 
 log = logging.getLogger(__name__)
@@ -104,6 +108,8 @@ class _Handler(ServerRequestHandler):
         self._corrupt = False
         self._peer: str | None = None  # one connection, one client: resolved once
         self._peer_known = False
+        self._last_rx = time.monotonic()
+        self._idle: asyncio.TimerHandle | None = None
 
     def _client(self) -> str:
         if self._peer is None or not self._peer_known:
@@ -111,6 +117,79 @@ class _Handler(ServerRequestHandler):
             self._peer_known = isinstance(peer, tuple)
             self._peer = f"{peer[0]}:{peer[1]}" if self._peer_known else str(self.server.gw_port_name)
         return self._peer
+
+    # --- limits and malformed frames (TCP: per connection; RTU: the one serial line) ---------
+    def _host(self) -> str:
+        client = self._client()
+        return client.rsplit(":", 1)[0] if self._peer_known else client
+
+    def callback_connected(self) -> None:
+        super().callback_connected()
+        gw = self.server
+        if gw.gw_kind != "tcp":
+            return
+        self.max_buffer_size = 1 << 18   # one socket read; pymodbus's 516 bytes drop coalesced frames
+        if len(gw.active_connections) > gw.gw_max_connections:
+            gw.gw_owner.traffic.connection(self._host(), f"connection refused (limit {gw.gw_max_connections})")
+            self.transport.close()
+        elif gw.gw_idle_s:
+            self._idle = self.loop.call_later(gw.gw_idle_s, self._idle_check)
+
+    def _idle_check(self) -> None:
+        self._idle = None
+        if not self.transport:
+            return
+        quiet, limit = time.monotonic() - self._last_rx, self.server.gw_idle_s
+        if quiet < limit:
+            self._idle = self.loop.call_later(limit - quiet, self._idle_check)
+            return
+        self.server.gw_owner.traffic.connection(self._host(), f"connection closed (idle {limit:g} s)")
+        self.transport.close()
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if self._idle is not None:
+            self._idle.cancel()
+        if self.recv_buffer and self.transport:   # pymodbus clears the buffer on close
+            self._malformed("truncated frame", self.recv_buffer)
+        super().connection_lost(exc)
+
+    def data_received(self, data: bytes) -> None:
+        self._last_rx = time.monotonic()
+        if len(self.recv_buffer) + len(data) > self.max_buffer_size:   # pymodbus drops it all
+            self._malformed("oversized frame", self.recv_buffer + data)
+        super().data_received(data)
+
+    def _malformed(self, kind: str, frame: bytes) -> None:
+        self.server.gw_owner.traffic.malformed(self._host(), kind, bytes(frame))
+
+    def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
+        """Malformed frames are counted and consumed here one by one (pymodbus's framer cannot
+        resynchronise after a bad MBAP header); a well-formed one goes on to pymodbus, which
+        serves one request per connection at a time."""
+        if self.server.gw_kind != "tcp":
+            used = super().callback_data(data, addr)
+            if used and not self.last_pdu:   # pymodbus dropped it: a CRC or a decoding failure
+                crc_ok = used > 2 and FramerRTU.check_CRC(data[:used - 2], int.from_bytes(data[used - 2:used], "big"))
+                self._malformed("undecodable PDU" if crc_ok else "bad CRC", data[:used])
+            return used
+        used = 0
+        while used < len(data):
+            problem, size = mbap_frame(data[used:], self.server.decoder.pdu_table)
+            if not size:
+                break   # wait for the rest
+            frame, used = data[used:used + size], used + size
+            if problem is None:
+                super().callback_data(frame, addr)
+                if self.last_pdu:
+                    break
+                problem = "undecodable PDU"
+            self._malformed(problem, frame)
+            device = self.server.gw_devices.get(frame[6]) if problem == "unknown function code" else None
+            if device is not None and device.link.mode == "none":
+                self.server_send(ExceptionResponse(frame[7], ExcCodes.ILLEGAL_FUNCTION, device_id=frame[6],
+                                                   transaction=(frame[0] << 8) | frame[1]), addr)
+        self.recv_buffer = data   # pymodbus's send() empties it; the caller cuts `used` off it
+        return used
 
     async def handle_request(self) -> None:
         pdu = self.last_pdu
@@ -223,17 +302,26 @@ class ModbusServer:
 
     kind "tcp": `address` = (host, port), port 0 = ephemeral (see `.port` after start).
     kind "rtu": `address` = serial port path; `serial` = dict(baudrate, parity, stopbits, bytesize).
-    `allow` = client IPs allowed on TCP (None = anyone).
+    `allow` = client IPs allowed on TCP (None = anyone). TCP limits: `max_connections` open at
+    once, `idle_timeout` s without a received byte (0 = none). `on_event(dict)` receives the
+    malformed-frame counts and connection refusals/closures (the controller audit).
     """
 
     def __init__(self, devices: Iterable[Device], kind: str, address: Any, *, name: str,
-                 allow: Iterable[str] | None = None, serial: dict | None = None) -> None:
+                 allow: Iterable[str] | None = None, serial: dict | None = None,
+                 max_connections: int = 64, idle_timeout: float = 60.0,
+                 on_event: Callable[[dict], Any] | None = None) -> None:
         self.devices = {d.unit_id: d for d in devices}
         if len(self.devices) == 0:
             raise TransportError(f"{name}: no devices to serve; pass at least one Device")
         self.kind, self.address, self.name = kind, address, name
         self.allow = set(allow) if allow is not None else None
         self.serial = serial or {}
+        if max_connections < 1 or idle_timeout < 0:
+            raise TransportError(f"{name}: max_connections {max_connections}, idle_timeout {idle_timeout} s; "
+                                 "need at least 1 connection and a timeout >= 0 s (0 = none)")
+        self.max_connections, self.idle_timeout = max_connections, idle_timeout
+        self.traffic = TrafficLog(name, log, on_event=on_event)
         self.port: int | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._server: Any = None
@@ -242,6 +330,7 @@ class ModbusServer:
         self._error: BaseException | None = None
 
     def start(self) -> None:
+        quiet_pymodbus()
         self._thread = threading.Thread(target=self._run, name=f"{self.name}-server", daemon=True)
         self._thread.start()
         if not self._ready.wait(10):
@@ -262,6 +351,7 @@ class ModbusServer:
         loop.call_soon_threadsafe(loop.stop)
         if self._thread:
             self._thread.join(5)
+        self.traffic.flush()
 
     def _run(self) -> None:
         loop = asyncio.new_event_loop()
@@ -288,7 +378,8 @@ class ModbusServer:
             server = _SerialServer(sims, port=self.address, framer=FramerType.RTU,
                                    reconnect_delay=0.5, **self.serial)
         server.gw_devices, server.gw_allow, server.gw_name = self.devices, self.allow, self.name
-        server.gw_port_name = self.address
+        server.gw_port_name, server.gw_kind, server.gw_owner = self.address, self.kind, self
+        server.gw_max_connections, server.gw_idle_s = self.max_connections, self.idle_timeout
         self._server = server
         await server.serve_forever(background=True)
         if self.kind == "tcp":

@@ -1,7 +1,8 @@
 """ModbusTcpTransport: all devices of a house on one Modbus TCP server, one unit id each."""
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
+from typing import Any
 
 from gateway.device.device import Device
 from gateway.transports.base import Transport
@@ -15,14 +16,23 @@ class ModbusTcpTransport(Transport):
     (others are disconnected and the attempt is reported as an event). Unknown unit ids get no
     reply. Link faults per device: silent, late, drop (connection closed); bad_crc does not apply
     to TCP (no CRC) and is ignored.
+
+    Limits: at most `max_connections` open at once (one more is closed at once), and a connection
+    that sends nothing for `idle_timeout` s is closed (0 = never); both are counted. Malformed
+    frames are counted per client and kind and logged a few a minute (`traffic`, a TrafficLog);
+    `on_event` receives those counts for the controller audit.
     """
 
     name = "modbus-tcp"
 
     def __init__(self, devices: Iterable[Device], host: str = "127.0.0.1", port: int = 5020,
-                 allow: Iterable[str] | None = None) -> None:
-        self._server = ModbusServer(devices, "tcp", (host, port), name=self.name, allow=allow)
+                 allow: Iterable[str] | None = None, max_connections: int = 64,
+                 idle_timeout: float = 60.0, on_event: Callable[[dict], Any] | None = None) -> None:
+        self._server = ModbusServer(devices, "tcp", (host, port), name=self.name, allow=allow,
+                                    max_connections=max_connections, idle_timeout=idle_timeout,
+                                    on_event=on_event)
         self.host = host
+        self.traffic = self._server.traffic
 
     @property
     def port(self) -> int | None:
