@@ -2,8 +2,8 @@
 
 Fed with the devices' event stream (writes, refusals, watchdog transitions, link events) and
 with request events from the transports (kind "request"), and with malformed-frame counts and
-refused or idle-closed connections (kinds "malformed" and "link") from the Modbus TCP server. Times are gateway-clock seconds, so a
-lock-step test gets the same report every time.
+refused or idle-closed connections (kinds "malformed" and "link") from the Modbus TCP server.
+Times are gateway-clock seconds, so a lock-step test gets the same report every time.
 """
 from __future__ import annotations
 
