@@ -1,19 +1,24 @@
-"""`twin devices`: list, show, lint and export the device maps in devices/."""
+"""`twin devices`: list, show, lint, export and import (CSV register table) the device maps in devices/."""
 from __future__ import annotations
 
 import argparse
 import importlib.util
 import sys
+from pathlib import Path
 
 from gateway.maps import export
 from gateway.maps.lint import lint_all, lint_map
-from gateway.maps.model import load_all, load_map, map_path
+from gateway.maps.model import DEVICES_DIR, load_all, load_map, map_path
+from gateway.maps.toml_writer import to_toml
 
 EXAMPLES = """examples:
   twin devices list
   twin devices show chp_neotower2
   twin devices lint                       # all maps, bindings checked against house1
   twin devices export-table boiler_wolf_cgb --format md
+  twin devices export-table boiler_wolf_cgb > my_boiler.csv   # edit it (device.id = my_boiler)
+  twin devices lint my_boiler.csv                             # a map name or a .toml/.csv path
+  twin devices import-table my_boiler.csv                     # writes devices/my_boiler.toml
   twin devices export-eds storage_io --out storage_io.eds
 """
 
@@ -36,12 +41,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     table = verbs.add_parser("export-table", help="register table as CSV or Markdown")
     table.add_argument("name")
     table.add_argument("--format", choices=("csv", "md"), default="csv")
+    imp = verbs.add_parser("import-table", help="CSV register table (the export-table form) to TOML")
+    imp.add_argument("file", type=Path)
+    imp.add_argument("--out", type=Path, help="TOML to write (default: devices/<device id>.toml)")
+    imp.add_argument("--force", action="store_true", help="overwrite an existing file")
     parser.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     return {"list": _list, "show": _show, "lint": _lint, "export-eds": _eds,
-            "export-table": _table}[args.verb](args)
+            "export-table": _table, "import-table": _import}[args.verb](args)
 
 
 def _list(args: argparse.Namespace) -> int:
@@ -64,7 +73,7 @@ def _show(args: argparse.Namespace) -> int:
 
 
 def _lint(args: argparse.Namespace) -> int:
-    maps = {args.name: load_map(map_path(args.name))} if args.name else load_all()
+    maps = {args.name: load_map(args.name)} if args.name else load_all()
     catalogue = None
     if not args.no_plant:
         from plant.house import load_house  # only here: listing maps must not need the plant
@@ -96,6 +105,22 @@ def _eds(args: argparse.Namespace) -> int:
 
 
 def _table(args: argparse.Namespace) -> int:
-    m = load_map(map_path(args.name))
+    m = load_map(args.name)
     sys.stdout.write(export.to_csv(m) if args.format == "csv" else export.to_markdown(m))
+    return 0
+
+
+def _import(args: argparse.Namespace) -> int:
+    m = load_map(args.file)           # every problem of the table, with line and column, or none
+    out = args.out or DEVICES_DIR / f"{m.id}.toml"
+    if out.stem != m.id:
+        print(f"twin devices import-table: {out}: the file stem must be the device id {m.id!r}; "
+              f"use --out {out.with_name(m.id + '.toml')}", file=sys.stderr)
+        return 2
+    if out.exists() and not args.force:
+        print(f"twin devices import-table: {out} exists; pass --force to overwrite", file=sys.stderr)
+        return 2
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(to_toml(m, source=args.file.name), encoding="utf-8")
+    print(f"wrote {out} ({len(m.points)} points)")
     return 0

@@ -6,8 +6,8 @@ gateway.device.device.Device. Addresses are 0-based wire (PDU) addresses; `doc_o
 `doc_prefix` only change the printed number. The field reference is devices/README.md.
 
 Loading checks everything a map can get wrong on its own and reports all problems at once as one
-DeviceMapError, each line shaped '<file> [point NAME]: <what is wrong>; <fix>'. Checks that need
-the plant (unknown signal names) live in gateway.maps.lint.
+DeviceMapError, each line shaped '<file> [point NAME]: <what is wrong>; <fix>'; a CSV register table
+(gateway.maps.csv_table) goes through the same checks. Checks that need the plant live in lint.
 """
 from __future__ import annotations
 
@@ -171,6 +171,7 @@ class DeviceMap:
     status_bits: tuple[tuple[int, str], ...]
     fault: FaultSpec
     points: tuple[Point, ...]
+    invalid: tuple[tuple[str, int], ...] = ()   # [modbus] invalid_<type>: the per-type default
     _by_name: dict[str, Point] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -219,17 +220,20 @@ def load_all(directory: Path | None = None) -> dict[str, DeviceMap]:
 
 
 def load_map(path: str | Path) -> DeviceMap:
-    """Load and check one map; raise one DeviceMapError listing every problem."""
+    """Load and check one map (.toml, or a .csv register table); one DeviceMapError lists every problem."""
     path = Path(path)
     if not path.suffix:
         path = map_path(str(path))
+    if path.suffix.lower() == ".csv":
+        from gateway.maps.csv_table import load_csv  # the CSV reader builds on this module
+        return load_csv(path)
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise DeviceMapError(f"{path}: cannot read map ({exc}); fix the TOML syntax") from exc
     problems: list[str] = []
     try:
-        dmap = _build(path, doc, problems)
+        dmap = build_map(path, doc, problems)
     except (KeyError, TypeError, ValueError) as exc:
         problems.append(f"{path}: malformed entry ({exc!r}); see devices/README.md for the fields")
         dmap = None
@@ -245,9 +249,17 @@ def _need(section: dict, key: str, where: str, problems: list[str], default: Any
     return section[key]
 
 
-def _build(path: Path, doc: dict, problems: list[str]) -> DeviceMap:
+def _not_one_of(where: str, key: str, value: Any, allowed: tuple[str, ...]) -> str:
+    close = "".join(f" (closest: {c})" for c in difflib.get_close_matches(str(value), allowed, n=1))
+    return f"{where} {key} = {value!r}: must be one of {', '.join(allowed)}{close}"
+
+
+def build_map(path: Path, doc: dict, problems: list[str], locate: Any = None,
+              point_where: list[str] | None = None) -> DeviceMap:
+    """A DeviceMap from a TOML-shaped document, appending problems; locate/point_where add lines."""
+    loc = locate or (lambda section, key: f"{path} [{section}]")
     dev = doc.get("device", {})
-    where = f"{path} [device]"
+    where = loc("device", "id")
     dev_id = _need(dev, "id", where, problems, path.stem)
     if dev_id != path.stem:
         problems.append(f"{where} id = {dev_id!r}: must equal the file stem; use {path.stem!r}")
@@ -260,43 +272,42 @@ def _build(path: Path, doc: dict, problems: list[str]) -> DeviceMap:
     mb = doc.get("modbus", {})
     word_order = mb.get("word_order", "hi_lo")
     if word_order not in WORD_ORDERS:
-        problems.append(f"{path} [modbus] word_order = {word_order!r}: must be one of {WORD_ORDERS}")
-    unit_id = _need(mb, "unit_id", f"{path} [modbus]", problems, 1)
+        problems.append(_not_one_of(loc("modbus", "word_order"), "word_order", word_order, WORD_ORDERS))
+    unit_id = _need(mb, "unit_id", loc("modbus", "unit_id"), problems, 1)
     if not isinstance(unit_id, int) or not 1 <= unit_id <= 247:
-        problems.append(f"{path} [modbus] unit_id = {unit_id!r}: must be an integer 1…247")
+        problems.append(f"{loc('modbus', 'unit_id')} unit_id = {unit_id!r}: must be an integer 1…247")
     invalid = {k.removeprefix("invalid_"): v for k, v in mb.items() if k.startswith("invalid_")}
     co = doc.get("canopen", {})
     canopen = CanopenSpec(
-        node_id=int(_need(co, "node_id", f"{path} [canopen]", problems, 0)),
+        node_id=int(_need(co, "node_id", loc("canopen", "node_id"), problems, 0)),
         device_type=int(co.get("device_type", 0)), heartbeat_ms=int(co.get("heartbeat_ms", 1000)),
     )
     if not 1 <= canopen.node_id <= 127:
-        problems.append(f"{path} [canopen] node_id = {canopen.node_id}: must be 1…127")
-    points = tuple(_point(path, i, raw, word_order, invalid, problems)
-                   for i, raw in enumerate(doc.get("map", {}).get("points", []) + doc.get("point", [])))
+        problems.append(f"{loc('canopen', 'node_id')} node_id = {canopen.node_id}: must be 1…127")
+    raws = doc.get("map", {}).get("points", []) + doc.get("point", [])
+    wheres = point_where or [path] * len(raws)
+    points = tuple(_point(wheres[i], i, raw, word_order, invalid, problems) for i, raw in enumerate(raws))
     if not points:
         problems.append(f"{path}: no points; add [map] points = [...] (or [[point]] blocks)")
-    wd = doc.get("watchdog")
-    watchdog = None
+    watchdog, wd = None, doc.get("watchdog")
     if wd is not None:
         refresh = wd.get("refresh_on", ["*"])
         watchdog = WatchdogRule(
-            timeout_s=float(_need(wd, "timeout_s", f"{path} [watchdog]", problems, 60.0)),
+            timeout_s=float(_need(wd, "timeout_s", loc("watchdog", "timeout_s"), problems, 60.0)),
             refresh_on=tuple([refresh] if isinstance(refresh, str) else refresh),
             on_expire=wd.get("on_expire", "internal"),
         )
         if watchdog.timeout_s <= 0:
-            problems.append(f"{path} [watchdog] timeout_s = {watchdog.timeout_s}: must be > 0 s")
+            problems.append(f"{loc('watchdog', 'timeout_s')} timeout_s = {watchdog.timeout_s}: must be > 0 s")
         if watchdog.on_expire != "internal":
-            problems.append(f"{path} [watchdog] on_expire = {watchdog.on_expire!r}: only 'internal'")
-    status = doc.get("status", {})
-    status_bits = tuple(sorted((int(k), v) for k, v in status.get("bits", {}).items()))
+            problems.append(f"{loc('watchdog', 'on_expire')} on_expire = {wd['on_expire']!r}: only 'internal'")
+    status_bits = tuple(sorted((int(k), v) for k, v in doc.get("status", {}).get("bits", {}).items()))
     for bit, source in status_bits:
         if not 0 <= bit <= 15:
-            problems.append(f"{path} [status] bit {bit}: must be 0…15")
+            problems.append(f"{loc('status', f'bits.{bit}')} bit {bit}: must be 0…15")
         if source.startswith("@") and source not in STATUS_FLAGS:
-            problems.append(f"{path} [status] bit {bit} = {source!r}: unknown flag; use one of "
-                            f"{', '.join(STATUS_FLAGS)} or a plant signal name")
+            problems.append(_not_one_of(loc("status", f"bits.{bit}"), f"bit {bit}", source, STATUS_FLAGS)
+                            + " or a plant signal name")
     fl = doc.get("fault", {})
     fault = FaultSpec(
         codes=tuple(sorted((int(k), v) for k, v in fl.get("codes", {}).items())),
@@ -312,7 +323,7 @@ def _build(path: Path, doc: dict, problems: list[str]) -> DeviceMap:
         functions=frozenset(mb.get("functions", [1, 2, 3, 4, 5, 6, 15, 16, 43])),
         doc_offset=int(mb.get("doc_offset", 0)), doc_prefix=str(mb.get("doc_prefix", "")),
         word_order=word_order, canopen=canopen, watchdog=watchdog, status_bits=status_bits,
-        fault=fault, points=points,
+        fault=fault, points=points, invalid=tuple(sorted(invalid.items())),
     )
 
 
@@ -323,7 +334,7 @@ _POINT_KEYS = {
 }
 
 
-def _point(path: Path, index: int, raw: dict, word_order: str, invalid: dict,
+def _point(path: Path | str, index: int, raw: dict, word_order: str, invalid: dict,
            problems: list[str]) -> Point:
     name = raw.get("name", f"#{index}")
     where = f"{path} [point {name}]"
@@ -334,11 +345,11 @@ def _point(path: Path, index: int, raw: dict, word_order: str, invalid: dict,
         _need(raw, key, where, problems)
     table, ptype, access = raw.get("table", "input"), raw.get("type", "uint16"), raw.get("access", "R")
     if table not in TABLES:
-        problems.append(f"{where} table = {table!r}: must be one of {', '.join(TABLES)}")
+        problems.append(_not_one_of(where, "table", table, TABLES))
     if ptype not in TYPES:
-        problems.append(f"{where} type = {ptype!r}: must be one of {', '.join(TYPES)}")
+        problems.append(_not_one_of(where, "type", ptype, TYPES))
     if access not in ACCESS:
-        problems.append(f"{where} access = {access!r}: must be one of {', '.join(ACCESS)}")
+        problems.append(_not_one_of(where, "access", access, ACCESS))
     if (table in BIT_TABLES) != (ptype == "bool"):
         problems.append(f"{where}: type {ptype!r} in table {table!r}; coils and discrete inputs are "
                         "type 'bool', registers are not")
@@ -354,12 +365,14 @@ def _point(path: Path, index: int, raw: dict, word_order: str, invalid: dict,
     if "command" in raw and access == "R":
         problems.append(f"{where}: command point must be writable; set access = 'RW'")
     if raw.get("state") is not None and raw["state"] not in STATES:
-        problems.append(f"{where} state = {raw['state']!r}: must be one of {', '.join(STATES)}")
+        problems.append(_not_one_of(where, "state", raw["state"], STATES))
     rng = raw.get("range")
     if rng is not None and (len(rng) != 2 or rng[0] > rng[1]):
         problems.append(f"{where} range = {rng!r}: must be [low, high] with low <= high")
+    if raw.get("word_order", word_order) not in WORD_ORDERS:
+        problems.append(_not_one_of(where, "word_order", raw["word_order"], WORD_ORDERS))
     if raw.get("on_bad", "exception") not in ON_BAD:
-        problems.append(f"{where} on_bad = {raw['on_bad']!r}: must be one of {ON_BAD}")
+        problems.append(_not_one_of(where, "on_bad", raw["on_bad"], ON_BAD))
     if ptype == "string" and int(raw.get("length", 0)) <= 0:
         problems.append(f"{where}: string point needs length > 0 (characters, 2 per register)")
     if raw.get("scale", 1.0) == 0:

@@ -109,10 +109,11 @@ def test_codec_saturates_and_converts_units():
 
 
 def test_export_csv_has_the_required_columns_and_wire_addresses():
-    text = export.to_csv(MAPS["mixing_station"])
-    rows = list(csv.DictReader(io.StringIO(text)))
-    assert {"device", "unit_id", "table", "address", "name", "type", "scale", "unit",
-            "access"} <= set(rows[0])
+    device_block, table = export.to_csv(MAPS["mixing_station"]).split("\n\n", 1)
+    assert "modbus.unit_id,4" in device_block.splitlines()
+    rows = list(csv.DictReader(io.StringIO(table)))
+    assert {"table", "address", "name", "type", "scale", "unit", "access", "binding",
+            "ref"} <= set(rows[0])
     flow = next(r for r in rows if r["name"] == "flow_setpoint")
     assert flow["address"] == "103" and flow["printed"] == "00104"   # Grundfos prints 1-based
 
