@@ -1,36 +1,24 @@
-"""Modbus RTU over a socat pty pair: the device contract, plus the corrupted-CRC link fault."""
+"""Modbus RTU over a virtual serial pair: the device contract, plus the corrupted-CRC link fault."""
 from __future__ import annotations
 
-import os
-import shutil
+import re
 import subprocess
-import tempfile
+import sys
 import time
 
 import pytest
 from pymodbus.client import ModbusSerialClient
 
 from gateway.transports.modbus_rtu import ModbusRtuTransport
+from gateway.transports.virtual_serial import VirtualSerialPair
 from tests.gateway.contract import TIMEOUT, ClientBus, DeviceContract, build_gateway
-
-pytestmark = pytest.mark.skipif(shutil.which("socat") is None,
-                                reason="socat not installed (needed for the pty pair)")
 
 
 @pytest.fixture(scope="module")
 def pty_pair():
     """Two linked pseudo-terminals: the server opens one end, the client the other."""
-    tmp = tempfile.mkdtemp(prefix="twin-rtu-")
-    a, b = os.path.join(tmp, "server"), os.path.join(tmp, "client")
-    proc = subprocess.Popen(["socat", f"pty,raw,echo=0,link={a}", f"pty,raw,echo=0,link={b}"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    for _ in range(100):
-        if os.path.exists(a) and os.path.exists(b):
-            break
-        time.sleep(0.02)
-    yield a, b
-    proc.terminate()
-    proc.wait(5)
+    with VirtualSerialPair() as pair:
+        yield pair.server_path, pair.client_path
 
 
 @pytest.fixture(scope="module")
@@ -62,3 +50,48 @@ class TestModbusRtu(DeviceContract):
         dev.clear_faults()
         time.sleep(0.05)
         assert isinstance(gateway.bus.read(dev.unit_id, "input", 500, 1), list)
+
+
+def test_virtual_port_serves_on_its_own_pair():
+    gw = build_gateway()
+    tr = ModbusRtuTransport(gw.devices.values(), port="virtual")
+    assert tr.client_path is None
+    tr.start()
+    try:
+        client = ModbusSerialClient(tr.client_path, baudrate=19200, parity="N", timeout=1, retries=0)
+        assert client.connect()
+        dev = gw.devices["mixing_station"]
+        assert isinstance(ClientBus(client).read(dev.unit_id, "input", 500, 1), list)
+        client.close()
+    finally:
+        tr.stop()
+    assert not tr._virtual.running
+
+
+def test_twin_serve_virtual_rtu_prints_a_path_a_master_reads(tmp_path):
+    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-rtu",
+                             "virtual", "--lock-step"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = []
+        for line in proc.stdout:  # the path is printed once the server listens
+            lines.append(line)
+            found = re.search(r"virtual serial port: connect your master to (\S+)", line)
+            if found:
+                break
+        assert found, "".join(lines)
+        proc.stdin.write("step 10\n")
+        proc.stdin.flush()
+        assert proc.stdout.readline().strip() == "t=10"
+        client = ModbusSerialClient(found.group(1), baudrate=19200, parity="N", timeout=2, retries=0)
+        assert client.connect()
+        answer = client.read_input_registers(0, count=2, device_id=5)  # storage I/O: T layers, 0.1 K
+        client.close()
+        assert not answer.isError() and all(100 < r < 1000 for r in answer.registers), answer
+        out, _ = proc.communicate("quit\n", timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, out
+    assert "modbus-rtu" in out and "1 requests" in out
