@@ -16,6 +16,7 @@ EXAMPLES = """examples:
   twin serve house1 --modbus-tcp 127.0.0.1:5020 --speed 60 --duration 86400   # a day in 24 min
   twin serve house1 --modbus-tcp 127.0.0.1:5020 --lock-step   # stdin: 'step N', 'status', 'quit'
   twin serve house1 --modbus-tcp 127.0.0.1:5020 --fault chp_neotower2:trip@600
+  twin serve house1 --modbus-tcp 127.0.0.1:5020 --speed 60 --http 127.0.0.1:8080   # live view
 """
 
 
@@ -51,9 +52,18 @@ def register(sub) -> None:
     p.add_argument("--devices", help="comma-separated device ids (default: all maps of the house)")
     p.add_argument("--read-only", action="store_true", help="refuse every write")
     p.add_argument("--allow", action="append", metavar="IP", help="Modbus TCP client allow-list (repeatable)")
+    p.add_argument("--max-connections", type=int, default=64, metavar="N",
+                   help="Modbus TCP connections open at once; one more is closed at once (default 64)")
+    p.add_argument("--idle-timeout", type=float, default=60.0, metavar="S",
+                   help="close a Modbus TCP connection that sends nothing for S seconds (default 60, 0 = never)")
     p.add_argument("--fault", action="append", default=[], metavar="DEV:KIND[:POINT[:DELTA]]@T",
                    help="inject a fault at simulated time T (repeatable)")
     p.add_argument("--scenario", help="fault scenario TOML file")
+    p.add_argument("--http", type=_hostport, metavar="HOST:PORT",
+                   help="live view and JSON API on http://HOST:PORT/ (see gateway/web/server.py)")
+    p.add_argument("--http-token", metavar="TOKEN",
+                   help="enable POST /api/faults for requests carrying 'Authorization: Bearer TOKEN' "
+                   "(without it, fault injection over HTTP is off)")
     p.add_argument("--loop", choices=("auto", "asyncio", "uvloop"), default="auto",
                    help="event loop of the servers (default auto: uvloop if installed, see the 'fast' extra)")
     p.set_defaults(func=serve)
@@ -85,7 +95,8 @@ def serve(args) -> int:
     rt.schedule(faults)
     loop = install(args.loop)
     if args.modbus_tcp:
-        tcp = rt.add_modbus_tcp(*args.modbus_tcp, allow=args.allow)
+        tcp = rt.add_modbus_tcp(*args.modbus_tcp, allow=args.allow, max_connections=args.max_connections,
+                                idle_timeout=args.idle_timeout)
     if args.modbus_rtu:
         rtu = rt.add_modbus_rtu(args.modbus_rtu, args.baud)
     if args.can:
@@ -93,6 +104,11 @@ def serve(args) -> int:
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     rt.start()
+    try:
+        web = _live_view(rt, args)
+    except Exception:
+        rt.stop()
+        raise
     where = []
     if args.modbus_tcp:
         where.append(f"modbus-tcp {args.modbus_tcp[0]}:{tcp.port}")
@@ -118,6 +134,8 @@ def serve(args) -> int:
                 stop.wait(0.2)
     except KeyboardInterrupt:
         pass
+    if web:
+        web.stop()
     report = rt.stop()
     print(rt.audit.text())
     late = report["lateness"]
@@ -146,3 +164,18 @@ def _lock_step_loop(rt, args, stop) -> None:
         if args.duration and rt.house.t >= args.duration:
             break
         time.sleep(0)
+
+
+def _live_view(rt, args):
+    """Start the live view (--http) and say where it is; None without --http."""
+    if not args.http:
+        if args.http_token:
+            raise ConfigError("twin serve: --http-token without --http; add --http 127.0.0.1:8080")
+        return None
+    from gateway.web.server import LiveServer
+
+    web = LiveServer(rt, *args.http, token=args.http_token)
+    web.start()
+    print(f"live view: {web.url} (fault injection over HTTP "
+          f"{'on, with the token' if web.token else 'off'})", flush=True)
+    return web
