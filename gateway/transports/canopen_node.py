@@ -29,6 +29,9 @@ from plant.errors import TransportError
 log = logging.getLogger(__name__)
 PRE_OPERATIONAL, OPERATIONAL, STOPPED = 127, 5, 4
 EMCY_PASSIVE, EMCY_BUS_OFF_RECOVERED, EMCY_PDO_LENGTH, EMCY_RPDO_TIMEOUT = 0x8120, 0x8140, 0x8210, 0x8250
+#: SDO client command specifiers answered with abort 0x05040001 before canopen sees them: block
+#: upload (5; canopen would answer as a plain upload), block download (6; canopen logs each), 7.
+SDO_UNSERVED, SDO_ABORT_COMMAND = (5, 6, 7), 0x05040001
 
 
 # ---------------------------------------------------------------------------------- one node
@@ -172,6 +175,12 @@ class DeviceNode(canopen.LocalNode):
         if self.device.link.mode == "late":
             time.sleep(min(self.device.link.delay_s, 1.0))   # holds the bus thread, like a slow node
         with self.lock:
+            ccs = data[0] >> 5 if data else 7
+            # a short frame, or a segment with no transfer begun (canopen: a traceback each), too
+            if len(data) < 8 or ccs in SDO_UNSERVED or (ccs in (0, 3) and self.sdo._buffer is None):
+                head = bytes(data[1:4]).ljust(3, b"\0")
+                self.sdo.send_response(bytes([0x80]) + head + SDO_ABORT_COMMAND.to_bytes(4, "little"))
+                return
             self.sdo.on_request(can_id, data, timestamp)
 
     def _on_nmt(self, can_id: int, data: bytes, timestamp: float) -> None:

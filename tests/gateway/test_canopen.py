@@ -174,6 +174,32 @@ def test_bad_sdo_accesses_get_the_abort_codes_of_the_refusal_table(rig):
                        ("run_request", "state")]
 
 
+def test_block_transfers_and_unknown_commands_are_aborted_at_once(rig):
+    """Issue 15: block requests got no abort; a master waited out its timeout instead."""
+    sdo = rig.node.sdo
+    assert aborted(lambda: sdo.open(0x1008, 0, "rb", block_transfer=True)) == 0x05040001
+    assert aborted(lambda: sdo.open(0x2F00, 2, "wb", size=2, block_transfer=True)) == 0x05040001
+    answers: list[tuple[float, bytes]] = []
+    rig.master.subscribe(0x580 + NODE, lambda _, data, __: answers.append((time.perf_counter(), bytes(data))))
+    requests = {"block upload": b"\xa4\x08\x10\x00\x7f\x00\x00\x00",
+                "block upload start": b"\xa3\x00\x00\x00\x00\x00\x00\x00",
+                "block download": b"\xc6\x00\x2f\x02\x02\x00\x00\x00",
+                "block download end": b"\xc1\x00\x00\x00\x00\x00\x00\x00",
+                "reserved specifier 7": b"\xe0\x00\x10\x00\x00\x00\x00\x00",
+                "segment without transfer": b"\x60\x00\x00\x00\x00\x00\x00\x00",
+                "short frame": b"\x40\x00\x10"}
+    for name, data in requests.items():
+        answers.clear()
+        sent = time.perf_counter()
+        rig.master.send_message(0x600 + NODE, data)
+        assert wait_until(lambda: answers, timeout=1.0), name
+        took, answer = answers[0][0] - sent, answers[0][1]
+        assert answer[0] == 0x80 and struct.unpack_from("<L", answer, 4)[0] == 0x05040001, name
+        assert answer[1:4] == data[1:4].ljust(3, b"\0"), name        # the request's object
+        assert took < 0.1, name
+    assert sdo[0x1008].raw == "neoTower 2.0"                              # still served
+
+
 def test_pdos_flow_only_in_operational(rig):
     rig.node.tpdo.read()
     rig.node.rpdo.read()
