@@ -20,8 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from plant.errors import ConfigError
+from plant.units import UNITS
 
-J_PER_KWH = 3.6e6
+J_PER_KWH = UNITS["kWh"].factor  # 3.6e6, from the one unit table
 #: a draw is delivered too cold below 45 degC; 0.5 K tolerance for the tap's mixing transient
 DHW_MIN_TAP = 44.5
 #: the comfort band: room at least set-point - 1 K

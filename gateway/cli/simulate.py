@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from plant.errors import ConfigError
+from plant.units import UNITS
 
 SIM_EXAMPLES = """examples:
   twin simulate house1 --start 2021-01-10 --days 7 --step 1 --out run.csv --plot run.png
@@ -92,7 +93,7 @@ def write_csv(path: Path, times: np.ndarray, rows: np.ndarray, names: list[str])
 
 
 def print_balance(L: dict) -> None:
-    kwh = 3.6e6
+    kwh = UNITS["kWh"].factor  # J
     print("energy balance [kWh]:")
     print(f"  fuel in                 {L['fuel'] / kwh:10.3f}")
     print(f"  electricity out (net)   {L['el_net'] / kwh:10.3f}")

@@ -1,5 +1,7 @@
 """The one codec: plant value (SI) ↔ device value (the map's unit) ↔ raw value ↔ 16-bit registers.
 
+Units convert through the one unit table, plant/units.py (volume flows as water, plant/water.py).
+
 Raw values are what a point's type holds on the wire: int for integer types, float for float32,
 bool for coils, str for strings. Integer raws saturate at the type limits, because a real device
 clips or reports invalid, it never wraps around.
@@ -8,28 +10,12 @@ from __future__ import annotations
 
 import math
 import struct
+from functools import cache
 
 from gateway.maps.model import Point
+from plant.errors import ConfigError
+from plant.units import factors
 
-#: Water density used for volume flows (kg per litre): the plant speaks kg/s, meters speak l/min.
-RHO_WATER = 1.0
-#: (si_unit, device_unit) -> (factor, offset): device = si * factor + offset.
-CONVERSIONS: dict[tuple[str, str], tuple[float, float]] = {
-    ("W", "kW"): (1e-3, 0.0),
-    ("J", "kWh"): (1 / 3.6e6, 0.0),
-    ("J", "Wh"): (1 / 3.6e3, 0.0),
-    ("J", "MWh"): (1 / 3.6e9, 0.0),
-    ("kg/s", "l/min"): (60.0 / RHO_WATER, 0.0),
-    ("kg/s", "l/h"): (3600.0 / RHO_WATER, 0.0),
-    ("kg/s", "m³/h"): (3.6 / RHO_WATER, 0.0),
-    ("1", "%"): (100.0, 0.0),
-    ("degC", "K"): (1.0, 273.15),          # Grundfos reports liquid temperature in kelvin
-    ("degC", "°C"): (1.0, 0.0),
-    ("V", "%"): (10.0, 0.0),                # 0-10 V demand shown as 0-100 %
-    ("V", "mV"): (1e3, 0.0),
-    ("s", "min"): (1 / 60, 0.0),
-    ("Pa", "bar"): (1e-5, 0.0),
-}
 LIMITS = {
     "uint16": (0, 0xFFFF), "bits16": (0, 0xFFFF), "int16": (-0x8000, 0x7FFF),
     "uint32": (0, 0xFFFFFFFF), "int32": (-0x80000000, 0x7FFFFFFF), "bool": (0, 1),
@@ -37,9 +23,17 @@ LIMITS = {
 
 
 def _factor(point: Point) -> tuple[float, float]:
-    if point.si_unit == point.unit or point.unit in ("", "1") and point.si_unit == "1":
+    """(factor, offset): device = si * factor + offset, from the one unit table (plant/units.py);
+    span=True admits the 0-10 V as 0-100 % convention of control inputs."""
+    return _unit_factor(point.si_unit, point.unit)
+
+
+@cache
+def _unit_factor(si_unit: str, unit: str) -> tuple[float, float]:
+    try:
+        return factors(si_unit, unit, span=True)
+    except ConfigError:  # not convertible: the value passes as is (the map lint reports it)
         return 1.0, 0.0
-    return CONVERSIONS.get((point.si_unit, point.unit), (1.0, 0.0))
 
 
 def to_device(point: Point, si: float) -> float:

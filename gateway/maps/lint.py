@@ -11,6 +11,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from gateway.maps.model import CO_AREAS, DeviceMap
+from plant import units
+from plant.errors import ConfigError
 
 PDO_BYTES = {"bool": 1, "uint16": 2, "int16": 2, "bits16": 2, "uint32": 4, "int32": 4, "float32": 4}
 
@@ -58,6 +60,11 @@ def lint_map(dmap: DeviceMap, catalogue: Any = None, house: str = "house1") -> l
             co_used[key] = p.name
             if not 1 <= (p.co_sub or 0) <= 254:
                 err(f"[point {p.name}] co_sub = {p.co_sub}: must be 1…254")
+        if p.type not in ("string", "bool"):
+            try:
+                units.factors(p.si_unit, p.unit, span=True)
+            except ConfigError as exc:
+                err(f"[point {p.name}] unit = {p.unit!r}, si_unit = {p.si_unit!r}: {exc}")
         if p.pdo:
             pdo_bytes[p.pdo] = pdo_bytes.get(p.pdo, 0) + PDO_BYTES.get(p.type, 99)
     for tag, size in sorted(pdo_bytes.items()):
@@ -117,14 +124,15 @@ def _bindings(dmap: DeviceMap, catalogue: Any, house: str) -> list[Problem]:
         bound = p.signal or p.command
         if bound and bound in catalogue and p.type != "bool":
             unit = catalogue.signal(bound).unit
-            if _norm(unit) != _norm(p.si_unit):
+            if not _same_unit(unit, p.si_unit):
                 out.append(Problem("error", f"{dmap.path} [point {p.name}]: plant unit of {bound} "
                                    f"is {unit!r}, map converts from {p.si_unit!r}; set si_unit"))
     return out
 
 
-def _norm(unit: str) -> str:
-    return {"°C": "degC", "": "1", "-": "1"}.get(unit, unit)
+def _same_unit(a: str, b: str) -> bool:
+    """Two names of one unit (degC and °C, 1 and ''), by the unit table."""
+    return a == b or units.convertible(a, b) and units.factors(a, b) == (1.0, 0.0)
 
 
 def _close(name: str, names: Any) -> str:

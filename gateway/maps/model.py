@@ -17,7 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from plant.errors import DeviceMapError
+from plant.errors import ConfigError, DeviceMapError
+from plant.units import si_unit as _si_unit
 
 #: Where shipped maps live (the repository's devices/ folder).
 DEVICES_DIR = Path(__file__).resolve().parents[2] / "devices"
@@ -39,12 +40,6 @@ STATES = (
 STATUS_FLAGS = ("@remote", "@watchdog", "@fault", "@tripped", "@sensor_fault", "@read_only", "@link_fault")
 #: Allowed CANopen manufacturer area for map-defined objects (CiA 301); profile objects 0x6000-0x9FFF.
 CO_AREAS = ((0x2000, 0x5FFF), (0x6000, 0x9FFF))
-#: Default SI unit (plant side) for each device unit; override per point with `si_unit`.
-SI_OF_UNIT = {
-    "°C": "degC", "degC": "degC", "K": "K", "W": "W", "kW": "W", "J": "J", "kWh": "J", "Wh": "J",
-    "MWh": "J", "kg/s": "kg/s", "l/min": "kg/s", "l/h": "kg/s", "m³/h": "kg/s", "%": "1", "1": "1",
-    "": "1", "h": "h", "s": "s", "min": "s", "V": "V", "mV": "V", "bar": "Pa", "Pa": "Pa",
-}
 
 
 @dataclass(frozen=True)
@@ -249,6 +244,14 @@ def _need(section: dict, key: str, where: str, problems: list[str], default: Any
     return section[key]
 
 
+def _default_si_unit(unit: str) -> str | None:
+    """The plant-side unit of a device unit (plant/units.py: `kW` -> `W`); None if unknown."""
+    try:
+        return _si_unit(unit)
+    except ConfigError:
+        return None
+
+
 def _not_one_of(where: str, key: str, value: Any, allowed: tuple[str, ...]) -> str:
     close = "".join(f" (closest: {c})" for c in difflib.get_close_matches(str(value), allowed, n=1))
     return f"{where} {key} = {value!r}: must be one of {', '.join(allowed)}{close}"
@@ -378,7 +381,7 @@ def _point(path: Path | str, index: int, raw: dict, word_order: str, invalid: di
     if raw.get("scale", 1.0) == 0:
         problems.append(f"{where} scale = 0: must be nonzero")
     unit = raw.get("unit", "")
-    si_unit = raw.get("si_unit", SI_OF_UNIT.get(unit))
+    si_unit = raw.get("si_unit", _default_si_unit(unit))
     if si_unit is None:
         problems.append(f"{where} unit = {unit!r}: no default SI unit; add si_unit = '...'")
     enum = tuple(sorted((int(k), str(v)) for k, v in raw.get("enum", {}).items()))

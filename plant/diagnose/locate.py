@@ -4,10 +4,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..catalogue import CATALOGUE
+from ..units import UNITS
 from ..water import CP, RHO
 from .context import MODES
 
-KWH = 3.6e6
+KWH = UNITS["kWh"].factor  # J in one kWh (3.6e6)
 
 
 def metrics(ctx, sim: np.ndarray, mask: np.ndarray) -> dict:

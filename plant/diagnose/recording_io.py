@@ -7,7 +7,7 @@ CSV: a `time` column in seconds since the recording start plus user columns. The
     [columns]
     "TS_CHP_out" = "chp.T_sup"      # user column -> catalogue signal
     [units]
-    "TS_CHP_out" = "degC"           # degC | K | kg/s | l/min | l/h | m3/h | W | kW | 1 | % | V | J | kWh | h
+    "TS_CHP_out" = "degC"           # any unit of the signal's kind in plant/units.py (K, l/min, kW, % ...)
 
 A gateway run directory (signals.csv, events.csv, meta.json) needs no mapping: its columns are
 catalogue names in catalogue units and meta.json holds the start.
@@ -33,23 +33,10 @@ try:
 except ModuleNotFoundError:  # pragma: no cover
     import tomli as tomllib
 
+from .. import units as unit_table
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError, DataError
 
-# unit -> (catalogue unit, factor, offset): catalogue value = value * factor + offset
-UNITS = {
-    "degC": ("degC", 1.0, 0.0), "°C": ("degC", 1.0, 0.0), "C": ("degC", 1.0, 0.0),
-    "K": ("degC", 1.0, -273.15),
-    "kg/s": ("kg/s", 1.0, 0.0), "l/s": ("kg/s", 1.0, 0.0), "l/min": ("kg/s", 1.0 / 60.0, 0.0),
-    "l/h": ("kg/s", 1.0 / 3600.0, 0.0), "m3/h": ("kg/s", 1000.0 / 3600.0, 0.0),
-    "kg/h": ("kg/s", 1.0 / 3600.0, 0.0),
-    "W": ("W", 1.0, 0.0), "kW": ("W", 1000.0, 0.0),
-    "W/m2": ("W/m2", 1.0, 0.0),
-    "1": ("1", 1.0, 0.0), "%": ("1", 0.01, 0.0), "-": ("1", 1.0, 0.0),
-    "V": ("V", 1.0, 0.0),
-    "J": ("J", 1.0, 0.0), "kWh": ("J", 3.6e6, 0.0),
-    "h": ("h", 1.0, 0.0),
-}
 # plausible range of a converted value per catalogue unit (catches e.g. Kelvin labelled degC)
 PLAUSIBLE = {"degC": (-40.0, 130.0), "kg/s": (-5.0, 5.0), "W": (-2e5, 2e5), "V": (-1.0, 11.0)}
 
@@ -171,11 +158,11 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
                 if u is None:
                     units[col] = cat_unit
                     continue
-                if u not in UNITS:
+                if u not in unit_table.UNITS:
                     problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
-                                    + ", ".join(sorted(UNITS)))
+                                    + ", ".join(sorted(n for n in unit_table.UNITS if n)))
                     continue
-                if UNITS[u][0] != cat_unit and not (cat_unit == "1" and u in ("%", "1", "-")):
+                if not unit_table.convertible(u, cat_unit):
                     problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
                                     f"(a {cat_unit} signal)")
                     continue
@@ -212,9 +199,9 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     data = {}
     for col, sig in colmap.items():
         u = units[col]
-        _, f, off = UNITS.get(u, (u, 1.0, 0.0))
-        v = raw[:, header.index(col)] * f + off
         cat_unit = CATALOGUE.signal(sig).unit
+        f, off = unit_table.factors(u, cat_unit)
+        v = raw[:, header.index(col)] * f + off
         lo_hi = PLAUSIBLE.get(cat_unit)
         if lo_hi is not None:
             fin = v[np.isfinite(v)]

@@ -10,8 +10,8 @@ Both have the same interface: set_input / set_inputs / step(dt) / read_outputs /
 A binding names our signal, the FMU variable and the unit our signal is in (temperatures degC,
 flows kg/s, powers W in the plant), optionally a third element: the unit the FMU variable is in,
 for FMUs that declare none (if the FMU declares one, both must agree).  The FMU's declared unit
-may differ from ours; `unit_conversion` is the
-ONE place where values are converted (K <-> degC, l/min <-> kg/s, kW <-> W, ...).  Every failure -
+may differ from ours; `unit_conversion` converts through the one unit table, plant/units.py
+(K <-> degC, l/min <-> kg/s, kW <-> W, ...).  Every failure -
 corrupt zip, no binary for this platform, unknown variable, unit that cannot be converted, FMI call
 failure - is an FmuError that names the FMU file and, where there is one, the variable.
 
@@ -34,42 +34,19 @@ from typing import Mapping
 import numpy as np
 
 from ..errors import FmuError
-from ..water import KG_PER_L_MIN, RHO
+from ..units import UNITS, convertible, factors
 from .inspect import inspect_fmu
-
-# unit -> (dimension, factor, offset): value_SI = value * factor + offset.  Volume flows count as
-# water mass flows (RHO), the project's convention for l/min signals.
-UNITS: dict[str, tuple[str, float, float]] = {
-    "K": ("temperature", 1.0, 0.0), "degC": ("temperature", 1.0, 273.15), "°C": ("temperature", 1.0, 273.15),
-    "degF": ("temperature", 5.0 / 9.0, 273.15 - 32.0 * 5.0 / 9.0),
-    "kg/s": ("mass flow", 1.0, 0.0), "kg/h": ("mass flow", 1.0 / 3600.0, 0.0),
-    "l/min": ("mass flow", KG_PER_L_MIN, 0.0), "l/s": ("mass flow", RHO / 1000.0, 0.0),
-    "l/h": ("mass flow", RHO / 1000.0 / 3600.0, 0.0), "m3/h": ("mass flow", RHO / 3600.0, 0.0),
-    "m3/s": ("mass flow", RHO, 0.0),
-    "W": ("power", 1.0, 0.0), "kW": ("power", 1e3, 0.0), "MW": ("power", 1e6, 0.0),
-    "J": ("energy", 1.0, 0.0), "kJ": ("energy", 1e3, 0.0), "Wh": ("energy", 3600.0, 0.0),
-    "kWh": ("energy", 3.6e6, 0.0), "MWh": ("energy", 3.6e9, 0.0),
-    "W/K": ("conductance", 1.0, 0.0), "kW/K": ("conductance", 1e3, 0.0),
-    "m": ("length", 1.0, 0.0), "cm": ("length", 0.01, 0.0), "mm": ("length", 0.001, 0.0),
-    "m3": ("volume", 1.0, 0.0), "l": ("volume", 0.001, 0.0),
-    "J/K": ("heat capacity", 1.0, 0.0), "kJ/K": ("heat capacity", 1e3, 0.0),
-    "kWh/K": ("heat capacity", 3.6e6, 0.0),
-    "Pa": ("pressure", 1.0, 0.0), "kPa": ("pressure", 1e3, 0.0), "bar": ("pressure", 1e5, 0.0),
-    "s": ("time", 1.0, 0.0), "min": ("time", 60.0, 0.0), "h": ("time", 3600.0, 0.0),
-    "1": ("1", 1.0, 0.0), "": ("1", 1.0, 0.0), "%": ("1", 0.01, 0.0),
-}
-
 
 def unit_conversion(ours: str | None, theirs: str, where: str) -> tuple[float, float]:
     """(a, b) with value_in_fmu = a * value_ours + b; None for `ours` takes the FMU value as is."""
     if ours is None or ours == theirs:
         return 1.0, 0.0
-    u, t = UNITS.get(ours), UNITS.get(theirs)
-    if u is None or t is None or u[0] != t[0]:
-        dims = f"{u[0] if u else 'unknown'} vs {t[0] if t else 'unknown'}"
+    if not convertible(ours, theirs):
+        u, t = UNITS.get(ours), UNITS.get(theirs)
+        dims = f"{u.kind if u else 'unknown'} vs {t.kind if t else 'unknown'}"
         raise FmuError(f"{where}: unit mismatch, FMU declares '{theirs or '(none)'}' but the signal is in "
                        f"'{ours}' ({dims}): cannot convert; bind it with the unit the FMU uses")
-    return u[1] / t[1], (u[2] - t[2]) / t[1]
+    return factors(ours, theirs)
 
 
 class _BoundFmu:

@@ -28,7 +28,7 @@ in the environment.
 Variables (FMI names keep the catalogue's dotted names; variableNamingConvention="structured"):
   inputs      the catalogue's input signals (chp.on, chp.y_set, boiler.U_set, dhw_pump.on,
               mixer.T_sup_set, mixer.m_flow_set), Real, in the catalogue's units (degC for
-              temperatures - the same table as plant/fmu/component.py's UNITS)
+              temperatures - the one unit table, plant/units.py)
   outputs     every output signal of the catalogue, Real, with its catalogue unit
   parameters  start_date (String, ISO date or date-time, default the house file's start or
               --start) and use_builtin_controller (Boolean, default false)
@@ -55,24 +55,29 @@ import tempfile
 from pathlib import Path
 
 from ..errors import ConfigError, FmuError
+from .. import units
 
 PYTHONFMU_VERSION = "0.7.0"
 INSTALL_HINT = f"pip install pythonfmu=={PYTHONFMU_VERSION}"
 
-# FMI 2.0 <UnitDefinitions>: unit -> SI base-unit exponents, factor, offset (value_SI = factor *
-# value + offset).  Names match plant/fmu/component.py's UNITS where that table has them.
+
+
+def _fmi_unit_definition(name: str) -> dict[str, float]:
+    """FMI 2.0 <UnitDefinitions> entry of a unit: SI base-unit exponents, factor, offset
+    (value_SI = factor * value + offset), from the one unit table (plant/units.py)."""
+    base, exponents = units.BASE[units.kind(name)]
+    factor, offset = units.factors(name, base)
+    d: dict[str, float] = dict(exponents)
+    if factor != 1.0:
+        d["factor"] = factor
+    if offset != 0.0:
+        d["offset"] = offset
+    return d
+
+
+# the catalogue's units, declared in every exported FMU
 UNIT_DEFINITIONS: dict[str, dict[str, float]] = {
-    "1": {},
-    "degC": {"K": 1, "offset": 273.15},
-    "K": {"K": 1},
-    "kg/s": {"kg": 1, "s": -1},
-    "W": {"kg": 1, "m": 2, "s": -3},
-    "W/m2": {"kg": 1, "s": -3},
-    "J": {"kg": 1, "m": 2, "s": -2},
-    "V": {"kg": 1, "m": 2, "s": -3, "A": -1},
-    "h": {"s": 1, "factor": 3600.0},
-    "s": {"s": 1},
-}
+    u: _fmi_unit_definition(u) for u in ("1", "degC", "K", "kg/s", "W", "W/m2", "J", "V", "h", "s")}
 
 SLAVE_TEMPLATE = '''\
 """FMI 2.0 co-simulation slave of the CoSES twin house {house_name!r}.
@@ -244,7 +249,7 @@ def slave_source(spec, start: str, builtin_controller: bool, class_name: str,
     missing = [u for u in units if u not in UNIT_DEFINITIONS]
     if missing:
         raise FmuError(f"catalogue units without an FMI unit definition: {', '.join(missing)}; "
-                       "add them to UNIT_DEFINITIONS in plant/fmu/export.py")
+                       "add them to UNIT_DEFINITIONS in plant/fmu/export.py (and plant/units.py)")
     # input start values: what the external-controller house holds before anything is set
     ref = House(spec, start=start, controller="external")
     starts = {s.name: ref.get(s.name) for s in CATALOGUE.inputs()}

@@ -48,8 +48,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..catalogue import CATALOGUE
 from ..errors import ConfigError
-from ..water import RHO
+from ..units import UNITS, convert
 
 CASES = {
     "nominal": ("the ideal twin (plant.house.load_house) with sensor noise only", None, ""),
@@ -95,17 +96,10 @@ COLUMNS = [
 NOISE = {"T": (0.07, 0.1), "Tair": (0.1, 0.1), "flow": (0.01, 0.1), "power": (0.01, 0.01)}
 FMT = {"cmd": "%.6g", "T": "%.1f", "Tair": "%.1f", "flow": "%.1f", "power": "%.2f"}
 GZIP_ABOVE = 2_000_000  # bytes
+KWH = UNITS["kWh"].factor  # J
 # the true (noise-free) quantities logged in meta.json / used for effect sizes
 TRUTH_AUX = ("chp.mode", "chp.T_sup", "chp.T_ret", "chp.m_flow", "chp.m_flow_pump", "mixer.m_flow_primary",
              "mixer.m_flow", "chp.on", "chp.Q_flow", "chp.Q_flow_meter", "boiler.m_flow", "dhw_pump.m_flow")
-
-
-def _to_unit(value: np.ndarray, unit: str) -> np.ndarray:
-    if unit == "l/min":
-        return value / RHO * 1000.0 * 60.0
-    if unit == "kW":
-        return value / 1000.0
-    return value
 
 
 def build_house(case: str, start: str, magnitude: float | None):
@@ -196,8 +190,8 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
         twin = load_house("house1", start=start)
         twin.run(float(t_sample[-1]), dt=1.0, out_interval=float(t_sample[-1]))
         Lt = twin.ledger()
-        effect["chp_heat_truth_kWh"] = ledger["heat_chp"] / 3.6e6
-        effect["chp_heat_ideal_twin_closed_loop_kWh"] = Lt["heat_chp"] / 3.6e6
+        effect["chp_heat_truth_kWh"] = ledger["heat_chp"] / KWH
+        effect["chp_heat_ideal_twin_closed_loop_kWh"] = Lt["heat_chp"] / KWH
         effect["chp_heat_error_ideal_twin_vs_truth"] = (Lt["heat_chp"] - ledger["heat_chp"]) / ledger["heat_chp"]
         effect["boiler_heat_error_ideal_twin_vs_truth"] = (Lt["heat_boiler"] - ledger["heat_boiler"]) / max(
             ledger["heat_boiler"], 1e-9)
@@ -205,7 +199,7 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
     # measurement model
     data = {}
     for j, (col, sig, unit, kind) in enumerate(COLUMNS):
-        v = _to_unit(rows[:, j].copy(), unit)
+        v = convert(rows[:, j].copy(), CATALOGUE.signal(sig).unit, unit)
         if kind in NOISE:
             sd, q = NOISE[kind]
             if kind in ("flow", "power"):
@@ -252,7 +246,7 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
                           "no recorded column shows the flow through the CHP",
         "truth_parameters": params,
         "effect": effect,
-        "ledger_kWh": {k: ledger[k] / 3.6e6 for k in ("fuel", "heat_chp", "heat_boiler",
+        "ledger_kWh": {k: ledger[k] / KWH for k in ("fuel", "heat_chp", "heat_boiler",
                                                        "heat_building", "heat_dhw", "losses",
                                                        "delta_stored", "residual")},
         "ledger_closure": ledger["closure"],
@@ -293,7 +287,7 @@ def effect_sizes(truth: dict, sample: float) -> dict:
             if (on & (mode > 2.5)).any() else float("nan")
         e["chp_own_pump_share_of_chp_flow_running"] = float(
             truth["chp.m_flow_pump"][on].sum() / max(truth["chp.m_flow"][on].sum(), 1e-12))
-    e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow"].sum() * sample / 3.6e6)
+    e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow"].sum() * sample / KWH)
     e["chp_running_hours"] = float(on.sum() * sample / 3600.0)
     return e
 
