@@ -60,6 +60,7 @@ def load_csv(path: str | Path) -> DeviceMap:
     key_lines: dict[str, int] = {}
     lines: list[int] = []
     derived: list[dict[str, str]] = []
+    clean: list[bool] = []
     header: list[str] | None = None
     end = 0
     for cells in reader:
@@ -77,15 +78,19 @@ def load_csv(path: str | Path) -> DeviceMap:
                 break
         else:
             row = dict(zip(header, cells))
+            before = len(problems)
             doc["point"].append(_row(f"{path}:{line}", row, len(cells) - len(header), problems))
-            derived.append({c: row[c] for c in DERIVED if row.get(c)})
+            # a row with a bad cell got neutral stand-ins; its derived cells are not compared
+            derived.append({c: row[c] for c in DERIVED if row.get(c)} if len(problems) == before else {})
+            clean.append(len(problems) == before)
             lines.append(line)
-    if header is None and not problems:
-        problems.append(f"{path}: no register table; after the device rows and a blank row, add a "
-                        f"header row ({', '.join(REQUIRED)}, ...) and one row per point")
-    if problems:
+    if header is None:
+        if not problems:
+            problems.append(f"{path}: no register table; after the device rows and a blank row, add "
+                            f"a header row ({', '.join(REQUIRED)}, ...) and one row per point")
         raise DeviceMapError("\n".join(problems))
-    _duplicates(path, doc["point"], lines, problems)
+    _duplicates(path, [r for r, ok in zip(doc["point"], clean) if ok],
+                [n for n, ok in zip(lines, clean) if ok], problems)
 
     def locate(section: str, key: str) -> str:
         line = key_lines.get(f"{section}.{key}")
@@ -97,6 +102,8 @@ def load_csv(path: str | Path) -> DeviceMap:
         problems.append(f"{path}: malformed entry ({exc!r}); see devices/README.md for the columns")
         raise DeviceMapError("\n".join(problems)) from exc
     for p, cells, line in zip(dmap.points, derived, lines):
+        if p.type not in TYPES:
+            continue                                   # reported above; it has no word count
         for column, actual in (("printed", dmap.printed_address(p)), ("words", str(p.words))):
             if cells.get(column, actual) != actual:
                 problems.append(f'{path}:{line} [point {p.name}] column "{column}": "{cells[column]}" '
@@ -142,8 +149,7 @@ def _device_row(path: Path, line: int, cells: list[str], doc: dict, key_lines: d
         bad = [v for v, p in zip(values, parsed) if p is None]
         if bad:
             problems.append(f'{where}: "{bad[0]}" is not a whole number; write {HOW[kind]}')
-            return
-        value: Any = parsed
+        value: Any = [p for p in parsed if p is not None]
     elif not values:
         if kind != "str":
             return                                     # empty number = the default
@@ -152,7 +158,7 @@ def _device_row(path: Path, line: int, cells: list[str], doc: dict, key_lines: d
         value = _parse(values[0], kind)
         if value is None:
             problems.append(f'{where}: "{values[0]}" is not a number; write {HOW[kind]}')
-            return
+            value = 1                                  # a stand-in every numeric key accepts
     if family and family.endswith("."):          # status.bits.3 -> [status] bits = { 3 = ... }
         section, name = family[:-1], key[len(family):]
     elif family:                                 # modbus.invalid_int16 -> [modbus] invalid_int16
@@ -183,7 +189,8 @@ def _header(path: Path, line: int, cells: list[str], problems: list[str]) -> lis
 
 
 def _row(at: str, row: dict[str, str], extra: int, problems: list[str]) -> dict:
-    """One table row as a TOML point; cell syntax problems are appended."""
+    """One table row as a TOML point; a bad cell is reported and replaced by a neutral stand-in
+    (required ones) or left out (optional ones), so the row's other problems are still found."""
     raw: dict[str, Any] = {}
     where = at + (f" [point {row['name']}]" if row.get("name") else "")
     if extra > 0:
@@ -203,6 +210,7 @@ def _row(at: str, row: dict[str, str], extra: int, problems: list[str]) -> dict:
             m = _TYPE.match(cell)
             if not m:
                 bad(column, "is not a type; write e.g. int16, or string[16] for 16 characters")
+                raw["type"] = "bool" if row.get("table") in ("coil", "discrete") else "uint16"
                 continue
             raw["type"] = m.group(1)
             if m.group(2):
@@ -211,6 +219,7 @@ def _row(at: str, row: dict[str, str], extra: int, problems: list[str]) -> dict:
             if (v := _parse(cell, "int")) is None:
                 bad(column, "is not a whole number; write " + ("the 0-based wire address, e.g. 12"
                             if column == "address" else "the raw value served, e.g. -32768"))
+                raw[column] = 0
             else:
                 raw[column] = v
         elif column in ("scale", "offset", "release_value"):
@@ -240,6 +249,7 @@ def _row(at: str, row: dict[str, str], extra: int, problems: list[str]) -> dict:
                 close = difflib.get_close_matches(word, list(BINDINGS.values()), n=1)
                 bad(column, f"is not '<how> <what>'; <how> is one of {', '.join(BINDINGS.values())}"
                     + (f" (closest: {close[0]})" if close else "") + ", e.g. reads boiler.T_sup")
+                raw["const"] = 0
             else:
                 raw[field] = _scalar(rest.strip()) if field == "const" else rest.strip()
         elif column == "canopen":
