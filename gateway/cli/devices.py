@@ -8,7 +8,7 @@ from pathlib import Path
 
 from gateway.maps import export
 from gateway.maps.lint import lint_all, lint_map
-from gateway.maps.model import DEVICES_DIR, load_all, load_map, map_path
+from gateway.maps.model import DEVICES_DIR, load_all, load_map
 from gateway.maps.toml_writer import to_toml
 
 EXAMPLES = """examples:
@@ -61,7 +61,7 @@ def _list(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    m = load_map(map_path(args.name))
+    m = load_map(args.name)
     print(f"{m.id}: {m.vendor} {m.model} ({m.kind}, {m.house})\n  style: {m.style}\n"
           f"  imitates: {m.imitates}\n  Modbus unit {m.unit_id}, functions "
           f"{sorted(m.functions)}; CANopen node {m.canopen.node_id:#04x}")
@@ -98,7 +98,7 @@ def _eds(args: argparse.Namespace) -> int:
         print("twin devices export-eds: gateway.transports.canopen_od has no export_eds(dmap, "
               "path_or_none); ask its author", file=sys.stderr)
         return 2
-    result = exporter(load_map(map_path(args.name)), args.out)
+    result = exporter(load_map(args.name), args.out)
     if isinstance(result, str) and not args.out:
         sys.stdout.write(result)
     return 0
