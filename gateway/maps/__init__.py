@@ -1,1 +1,1 @@
-"""Device maps: the DeviceMap/Point model, the codec, lint and register-table export."""
+"""Device maps: the DeviceMap/Point model, the codec, lint, register-table export and CSV import."""

@@ -270,8 +270,7 @@ def build_map(path: Path, doc: dict, problems: list[str], locate: Any = None,
     identity = Identity(
         vendor=ident.get("vendor", ""), product=ident.get("product", ""),
         serial=str(ident.get("serial", "")), firmware=ident.get("firmware", ""),
-        product_code=int(ident.get("product_code", 0)), revision=int(ident.get("revision", 0)),
-    )
+        product_code=int(ident.get("product_code", 0)), revision=int(ident.get("revision", 0)))
     mb = doc.get("modbus", {})
     word_order = mb.get("word_order", "hi_lo")
     if word_order not in WORD_ORDERS:
@@ -287,9 +286,8 @@ def build_map(path: Path, doc: dict, problems: list[str], locate: Any = None,
     )
     if not 1 <= canopen.node_id <= 127:
         problems.append(f"{loc('canopen', 'node_id')} node_id = {canopen.node_id}: must be 1…127")
-    raws = doc.get("map", {}).get("points", []) + doc.get("point", [])
-    wheres = point_where or [path] * len(raws)
-    points = tuple(_point(wheres[i], i, raw, word_order, invalid, problems) for i, raw in enumerate(raws))
+    points = tuple(_point(point_where[i] if point_where else path, i, raw, word_order, invalid, problems)
+                   for i, raw in enumerate(doc.get("map", {}).get("points", []) + doc.get("point", [])))
     if not points:
         problems.append(f"{path}: no points; add [map] points = [...] (or [[point]] blocks)")
     watchdog, wd = None, doc.get("watchdog")
