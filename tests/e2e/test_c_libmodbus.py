@@ -3,26 +3,25 @@
 The controller runs as a subprocess with --lockstep: the harness writes one line, the controller
 scans once and answers one line, then the harness steps the plant SCAN x 1 s.
 """
-import shutil
 import subprocess
 
 import pytest
 
-from gateway.recording import read_recording
+from profiles.recording import read_recording
 from gateway.transports.modbus_tcp import ModbusTcpTransport
+from tests.conftest import require_tool
 
 from .conftest import DAY, EXAMPLES, SCAN, check_against_offline, make_runtime, modbus_port, recorded_kpis
 
 SRC = EXAMPLES / "c-libmodbus"
 
 
-def _have_libmodbus() -> bool:
-    return bool(shutil.which("pkg-config") and shutil.which("make") and subprocess.run(
-        ["pkg-config", "--exists", "libmodbus"]).returncode == 0)
-
-
-pytestmark = pytest.mark.skipif(not _have_libmodbus(),
-                                reason="libmodbus not found by pkg-config (apt-get install libmodbus-dev)")
+@pytest.fixture(autouse=True, scope="module")
+def build_tools():
+    for tool in ("gcc", "make", "pkg-config"):
+        require_tool(tool, f"apt-get install {tool}")
+    require_tool("libmodbus", "apt-get install libmodbus-dev",
+                 found=subprocess.run(["pkg-config", "--exists", "libmodbus"]).returncode == 0)
 
 
 @pytest.fixture(scope="module")

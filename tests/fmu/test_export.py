@@ -8,6 +8,7 @@ import pytest
 from gateway.cli.main import main
 from plant.catalogue import CATALOGUE
 from plant.house import load_house
+from tests.conftest import require_tool
 
 INPUTS = [s.name for s in CATALOGUE.inputs()]
 SENSORS = [f"storage.T_sensor_{i}" for i in range(1, 11)]
@@ -17,8 +18,8 @@ HOURS = 6
 
 
 def needs_pythonfmu():
-    if importlib.util.find_spec("pythonfmu") is None:
-        pytest.skip("pythonfmu is not installed (pip install pythonfmu==0.7.0): it builds the FMU")
+    require_tool("pythonfmu", 'pip install -e ".[test]"',  # it builds the FMU
+                 found=importlib.util.find_spec("pythonfmu") is not None)
 
 
 @pytest.fixture(scope="module")

@@ -1,16 +1,15 @@
 """Bad FMUs and bad bindings: each is an FmuError naming the FMU file and, where there is one, the variable."""
-import shutil
 import zipfile
 
 import pytest
 
 from plant.errors import FmuError
+from tests.conftest import require_tool
 
 
 @pytest.fixture(scope="module")
 def storage_fmu(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the storage FMU is compiled from C source")
+    require_tool("gcc", "apt-get install gcc")  # the storage FMU is compiled from C source
     from plant.fmu.build import build_storage_fmu
 
     return build_storage_fmu(cache_dir=tmp_path_factory.getbasetemp() / "fmu-cache")

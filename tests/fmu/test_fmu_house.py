@@ -11,6 +11,7 @@ import plant.house  # noqa: F401  (before loading the exported FMU: see plant/fm
 from plant.catalogue import CATALOGUE
 from plant.errors import SignalError
 from plant.house import load_house
+from tests.conftest import require_tool
 
 INPUTS = [s.name for s in CATALOGUE.inputs()]
 SENSORS = [f"storage.T_sensor_{i}" for i in range(1, 11)]
@@ -21,8 +22,8 @@ BOILER, STORAGE_IO = 2, 5  # Modbus unit ids of boiler_wolf_cgb and storage_io
 
 @pytest.fixture(scope="module")
 def house_file(tmp_path_factory):
-    if importlib.util.find_spec("pythonfmu") is None:
-        pytest.skip("pythonfmu is not installed (pip install pythonfmu==0.7.0): it builds the FMU")
+    require_tool("pythonfmu", 'pip install -e ".[test]"',  # it builds the FMU
+                 found=importlib.util.find_spec("pythonfmu") is not None)
     from plant.fmu.export import export_house_fmu
 
     folder = tmp_path_factory.mktemp("fmu-house")
@@ -44,7 +45,7 @@ def test_runtime_serves_the_fmu_plant_over_modbus_like_the_native_house(house_fi
     from gateway.clock import LockStepClock
     from gateway.maps.lint import lint_all
     from gateway.maps.model import load_all
-    from gateway.recording import read_recording
+    from profiles.recording import read_recording
     from gateway.runtime import Runtime
     from plant.fmu.house import FmuHouse
 

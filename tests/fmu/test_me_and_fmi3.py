@@ -2,13 +2,13 @@
 adapter, against the analytic solution of the heat lag C dT/dt = 1000 P - UA (T - T_env) built
 from plant/fmu/lag_c.  Bindings convert units: P in W (FMU: kW), T and T_env in degC (FMU: K),
 C in kWh/K (FMU: J/K)."""
-import shutil
 import time
 
 import numpy as np
 import pytest
 
 from plant.errors import ConfigError, FmuError
+from tests.conftest import require_tool
 
 UA, C, T0 = 20.0, 3.35e6, 70.0  # W/K, J/K, degC
 TAU = C / UA
@@ -16,8 +16,7 @@ TAU = C / UA
 
 @pytest.fixture(scope="module")
 def lag(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the test FMUs are compiled from C source")
+    require_tool("gcc", "apt-get install gcc")  # the test FMUs are compiled from C source
     from plant.fmu.build import build_lag_fmu
 
     cache = tmp_path_factory.getbasetemp() / "fmu-cache"

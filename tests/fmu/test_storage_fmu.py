@@ -1,5 +1,4 @@
 """The storage FMU built from C source: validates in fmpy, matches the native kernel, closes its energy balance."""
-import shutil
 import zipfile
 
 import numpy as np
@@ -7,14 +6,14 @@ import pytest
 
 from plant.components import storage as st
 from plant.water import CP, RHO
+from tests.conftest import require_tool
 
 N = 40
 
 
 @pytest.fixture(scope="module")
 def storage_fmu(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the storage FMU is compiled from C source")
+    require_tool("gcc", "apt-get install gcc")  # the storage FMU is compiled from C source
     from plant.fmu.build import build_storage_fmu
 
     # one cache per test session: both FMU test modules compile once between them

@@ -1,7 +1,6 @@
 """Modbus TCP over loopback: the device contract, plus TCP-only behaviour (allow-list, drop, late, mbpoll)."""
 from __future__ import annotations
 
-import shutil
 import socket
 import subprocess
 import time
@@ -10,6 +9,7 @@ import pytest
 from pymodbus.client import ModbusTcpClient
 
 from gateway.transports.modbus_tcp import ModbusTcpTransport
+from tests.conftest import require_tool
 from tests.gateway.contract import TIMEOUT, ClientBus, DeviceContract, build_gateway
 
 
@@ -73,8 +73,8 @@ def test_allow_list_refuses_other_clients():
         tr.stop()
 
 
-@pytest.mark.skipif(shutil.which("mbpoll") is None, reason="mbpoll not installed (apt-get install mbpoll)")
 def test_mbpoll_reads_chp_registers(tcp_gateway):
+    require_tool("mbpoll", "apt-get install mbpoll")
     gw = tcp_gateway
     out = subprocess.run(
         ["mbpoll", "-m", "tcp", "-a", "1", "-t", "3", "-0", "-r", "8019", "-c", "2", "-1",

@@ -1,6 +1,5 @@
 """House 1 with its heating storage as the C storage FMU (plant/fmu/build.py), stepped from Python
 between solver.before_storage and solver.after_storage; the split path itself reproduces run()."""
-import shutil
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +9,7 @@ from plant import solver
 from plant.catalogue import CATALOGUE
 from plant.errors import ConfigError
 from plant.house import load_house
+from tests.conftest import require_tool
 
 HOUSE1 = Path(__file__).resolve().parents[2] / "plant" / "houses" / "house1.toml"
 STORAGE_T = [CATALOGUE.index(f"storage.T_sensor_{i}") for i in range(1, 11)] + [
@@ -48,8 +48,7 @@ def fmu_house_file(tmp_path, fmu, bindings=BINDINGS, fmu_line=None):
 
 @pytest.fixture(scope="module")
 def storage_fmu(tmp_path_factory):
-    if shutil.which("gcc") is None:
-        pytest.skip("gcc is not installed: the storage FMU is compiled from C source")
+    require_tool("gcc", "apt-get install gcc")  # the storage FMU is compiled from C source
     from plant.fmu.build import build_storage_fmu
 
     return build_storage_fmu(cache_dir=tmp_path_factory.getbasetemp() / "fmu-cache")
