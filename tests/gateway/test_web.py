@@ -1,8 +1,8 @@
 """Live view: the JSON API against a running lock-step gateway (values, token enforcement), the
 `twin serve --http` command line, and the page in a real headless browser (values shown in the
 schematic and the device tables equal the plant's at that moment)."""
+import importlib.util
 import json
-import os
 import re
 import shutil
 import subprocess
@@ -19,6 +19,7 @@ from gateway.maps import codec
 from gateway.runtime import Runtime
 from gateway.web.server import LiveServer
 from plant.house import load_house
+from tests.conftest import require_tool
 
 BOILER = 2  # unit id of boiler_wolf_cgb
 TOKEN = "test-token-5f2a"
@@ -200,15 +201,10 @@ def test_twin_serve_http_serves_the_api(tmp_path):
 
 # ---------------------------------------------------------------------------- the browser
 def _browser():
-    # TODO(conftest): switch to the shared `require_tool` helper (fails under CI) once
-    # tests/conftest.py has it; until then a missing browser skips with the reason.
-    missing = [t for t in ("chromium", "chromedriver") if shutil.which(t) is None]
-    if missing:
-        if os.environ.get("CI"):
-            pytest.fail(f"{', '.join(missing)} not installed; CI must have the Debian packages "
-                        "chromium and chromium-driver")
-        pytest.skip(f"{', '.join(missing)} not installed (apt-get install chromium chromium-driver)")
-    webdriver = pytest.importorskip("selenium.webdriver", reason="pip install -e .[test] (selenium)")
+    require_tool("chromium", "apt-get install chromium")
+    require_tool("chromedriver", "apt-get install chromium-driver")
+    require_tool("selenium", 'pip install -e ".[test]"', found=importlib.util.find_spec("selenium") is not None)
+    from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
     opts = webdriver.ChromeOptions()

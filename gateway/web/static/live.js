@@ -21,6 +21,8 @@ function fmt(v, digits, scale, unit) {
   return (v * (scale || 1)).toFixed(digits) + (unit || "");
 }
 
+const isoTime = (ts) => new Date(ts * 1000).toISOString().replace("T", " ");
+
 function tempColour(T) {
   if (T === null || T === undefined) return "#9ca3af";
   const f = Math.max(0, Math.min(1, (T - 15) / (80 - 15)));
@@ -71,7 +73,7 @@ function renderSignals(sig) {
 function renderClock(c) {
   $("#house").textContent = c.house;
   startEpoch = c.start ? Date.parse(c.start + "T00:00:00Z") / 1000 : 0;
-  const when = new Date((startEpoch + c.t) * 1000).toISOString().replace("T", " ").slice(0, 19);
+  const when = isoTime(startEpoch + c.t).slice(0, 19);
   const day = Math.floor(c.t / 86400);
   $("#sim-time").textContent = `${when} (t = ${c.t.toFixed(0)} s, day ${day})`;
   $("#clock-mode").textContent = c.mode === "paced" ? `paced ${c.factor}× · dt ${c.dt} s` : `lock-step · dt ${c.dt} s`;
@@ -148,8 +150,10 @@ async function renderPlot() {
     if (plot) plot.destroy();
     plot = new uPlot({
       width, height: 380, tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), "Etc/UTC"),
-      series: [{}, ...chosen.map((n, i) => ({ label: n, stroke: COLOURS[i % COLOURS.length], width: 1.5 }))],
-      axes: [{}, { size: 50 }], legend: { live: true },
+      series: [{ label: "time (UTC)", value: (u, ts) => ts === null ? "–" : isoTime(ts).slice(5, 16) },
+        ...chosen.map((n, i) => ({ label: n, stroke: COLOURS[i % COLOURS.length], width: 1.5 }))],
+      axes: [{ values: (u, splits) => splits.map((ts) => isoTime(ts).slice(11, 16)) }, { size: 50 }],
+      legend: { live: true },
     }, data, $("#plot"));
     plotKey = key;
   } else {
