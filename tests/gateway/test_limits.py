@@ -15,7 +15,7 @@ import pytest
 from gateway.audit import Audit
 from gateway.maps import codec
 from gateway.transports.modbus_tcp import ModbusTcpTransport
-from gateway.transports.traffic_log import TrafficLog, mbap_frame
+from gateway.transports.traffic_log import TrafficLog, mbap_frame, quiet_pymodbus
 from tests.gateway.contract import build_gateway
 
 
@@ -185,3 +185,18 @@ def test_traffic_log_logs_a_few_examples_a_minute_then_a_summary(caplog):
 ])
 def test_mbap_frame_cuts_and_judges_one_frame(frame, expected):
     assert mbap_frame(frame, {3, 4, 6}) == expected
+
+
+def test_pymodbus_log_keeps_one_line_per_record_and_ten_a_minute():
+    quiet_pymodbus()
+    logger = logging.getLogger("pymodbus.logging")
+    passed = []
+    for i in range(15):
+        record = logger.makeRecord("pymodbus.logging", logging.ERROR, __file__, 1,
+                                   "Cancel send, because not connected!\n>>>>> send: 0x0 0x1", (), None)
+        if all(f.filter(record) for f in logger.filters):
+            passed.append(record.getMessage())
+    decode = logger.makeRecord("pymodbus.logging", logging.WARNING, __file__, 1,
+                               "Unable to decode frame %s", ("x",), None)
+    assert not all(f.filter(decode) for f in logger.filters)      # counted by TrafficLog instead
+    assert 1 <= len(passed) <= 10 and all("\n" not in m for m in passed)
