@@ -106,6 +106,7 @@ class _Handler(ServerRequestHandler):
     def __init__(self, owner: Any, *args: Any) -> None:
         super().__init__(owner, *args)
         self._corrupt = False
+        self._tasks: set[asyncio.Task] = set()
         self._peer: str | None = None  # one connection, one client: resolved once
         self._peer_known = False
         self._last_rx = time.monotonic()
@@ -191,56 +192,99 @@ class _Handler(ServerRequestHandler):
         self.recv_buffer = data   # pymodbus's send() empties it; the caller cuts `used` off it
         return used
 
+    def handle_later(self) -> None:
+        """pymodbus passes every request through run_coroutine_threadsafe: a Task, a concurrent
+        Future, a self-pipe write and two more event-loop turns, a third of the server's time per
+        request. This runs in the loop's own thread already, so a request is answered right here;
+        only a late answer or a request for the simulator becomes a task."""
+        pdu = self.last_pdu
+        device = self._admit(pdu) if pdu else None
+        if device is None:
+            return
+        if device.link.mode == "late":
+            self._spawn(self._answer_late(device, pdu))
+        elif not self._answer(device, pdu):
+            self._spawn(self._simulate(device, pdu))
+
     async def handle_request(self) -> None:
         pdu = self.last_pdu
-        if not pdu:
+        device = self._admit(pdu) if pdu else None
+        if device is None:
             return
+        if device.link.mode == "late":
+            await self._answer_late(device, pdu)
+        elif not self._answer(device, pdu):
+            await self._simulate(device, pdu)
+
+    def _spawn(self, coro: Any) -> None:
+        task = self.loop.create_task(coro)
+        self._tasks.add(task)  # the loop keeps only a weak reference
+        task.add_done_callback(self._tasks.discard)
+
+    def _admit(self, pdu: Any) -> Device | None:
+        """The device to answer `pdu`, or None for no reply (unknown unit, refused client, a
+        silent or dropped link)."""
         gw = self.server
         device: Device | None = gw.gw_devices.get(pdu.dev_id)
         if device is None:
-            return  # unknown unit id: no reply (TCP default in §2.5; RTU: someone else's address)
+            return None  # unknown unit id: no reply (TCP default in §2.5; RTU: someone else's address)
         client = self._client()
         if gw.gw_allow is not None and client.rsplit(":", 1)[0] not in gw.gw_allow:
             device.report({"kind": "link", "transport": gw.gw_name, "client": client,
                            "event": "client refused", "reason": "client"})
             if self.transport and gw.gw_name == "modbus-tcp":
                 self.transport.close()
-            return
+            return None
         link = device.link
         if link.mode == "silent":
-            return
+            return None
         if link.mode == "drop":
             if self.transport and gw.gw_name == "modbus-tcp":
                 self.transport.abort()
-            return
-        if link.mode == "late":
-            await asyncio.sleep(link.delay_s)
-            self.last_pdu = pdu
+            return None
+        return device
+
+    async def _answer_late(self, device: Device, pdu: Any) -> None:
+        await asyncio.sleep(device.link.delay_s)
+        if not self._answer(device, pdu):
+            await self._simulate(device, pdu)
+
+    def _answer(self, device: Device, pdu: Any) -> bool:
+        """Answer `pdu` now (whitelist, FC43, FC3/FC4/FC6 from the Device); False if the simulator
+        must answer it (the request has been counted)."""
+        gw = self.server
+        client = self._client()
         refusal = device.check_function(pdu.function_code)
         if refusal is None and isinstance(pdu, ReadDeviceInformationRequest):
             self._send(_identification(device, pdu), pdu)
-            return
-        self._corrupt = link.mode == "bad_crc" and gw.gw_name == "modbus-rtu"
+            return True
+        self._corrupt = device.link.mode == "bad_crc" and gw.gw_name == "modbus-rtu"
         try:
             if refusal is not None:
                 device.report({"kind": "link", "transport": gw.gw_name, "client": client,
                                "event": f"function {pdu.function_code} refused", "reason": "function"})
                 self._send(ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_FUNCTION), pdu)
-                return
+                return True
             # counted by the controller audit (poll rates); the recorder does not log them
             device.report({"kind": "request", "transport": gw.gw_name, "client": client,
                            "fc": pdu.function_code})
             direct = _direct(device, pdu, client, gw.gw_name)
-            if direct is not None:
-                self._send(direct, pdu)
-                return
-            token = _REQUEST.set((device, pdu, client))
-            try:
-                await super().handle_request()
-            finally:
-                _REQUEST.reset(token)
+            if direct is None:
+                return False
+            self._send(direct, pdu)
+            return True
         finally:
             self._corrupt = False
+
+    async def _simulate(self, device: Device, pdu: Any) -> None:
+        token = _REQUEST.set((device, pdu, self._client()))
+        self._corrupt = device.link.mode == "bad_crc" and self.server.gw_name == "modbus-rtu"
+        try:
+            self.last_pdu = pdu  # pymodbus answers self.last_pdu; a later frame may have replaced it
+            await super().handle_request()
+        finally:
+            self._corrupt = False
+            _REQUEST.reset(token)
 
     def _send(self, response: Any, pdu: Any) -> None:
         response.transaction_id = pdu.transaction_id
