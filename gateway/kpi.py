@@ -12,15 +12,15 @@ Units: the signals are SI (W, degC, kg/s); the KPIs are reported in kWh, K·h, h
 """
 from __future__ import annotations
 
-import csv
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
 
-from plant.errors import ConfigError
+from plant.errors import ConfigError, DataError
 from plant.units import UNITS
+from profiles.recording import read_recording
 
 J_PER_KWH = UNITS["kWh"].factor  # 3.6e6, from the one unit table
 #: a draw is delivered too cold below 45 degC; 0.5 K tolerance for the tap's mixing transient
@@ -63,21 +63,12 @@ class Kpis:
 
 def load_series(path: str | Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     """(times [s], names, rows) of a recording directory or a simulate CSV."""
-    p = Path(path)
-    if p.is_dir():
-        from gateway.recording import read_recording
-
-        rec = read_recording(p)
-        return rec.time, rec.names, rec.values
-    if not p.exists():
-        raise ConfigError(f"{p}: no such recording directory or CSV file")
-    with open(p, newline="") as fh:
-        header = next(csv.reader(fh), None)
-    if not header or header[0] != "time":
-        raise ConfigError(f"{p}: not a house-twin CSV (first column must be 'time'); "
-                          "give a `twin serve --record` directory or a `twin simulate --out` CSV")
-    data = np.loadtxt(p, delimiter=",", skiprows=1, ndmin=2)
-    return data[:, 0], header[1:], data[:, 1:]
+    try:
+        rec = read_recording(path)
+    except DataError as exc:
+        raise ConfigError(f"{exc}; not a house-twin recording: give a `twin serve --record` "
+                          "directory or a `twin simulate --out` CSV") from None
+    return rec.time, rec.names, rec.values
 
 
 def _intervals(t: np.ndarray) -> np.ndarray:

@@ -23,9 +23,9 @@ from gateway.clock import LockStepClock, PacedClock
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.maps.model import load_all
-from gateway.recording import Recorder
 from gateway.transports.registry import transport_class
 from plant.errors import ConfigError
+from profiles.recording import Recorder
 
 
 class Runtime:

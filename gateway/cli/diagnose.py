@@ -10,7 +10,7 @@ from pathlib import Path
 EXAMPLES = """examples:
   twin diagnose --requirements house1
   twin diagnose --house house1 --recording lab.csv --map columns.toml --out report/
-  twin diagnose --house house1 --recording runs/today --out report/        # gateway recording dir
+  twin diagnose --house house1 --recording runs/today --out report/        # twin serve --record dir
 """
 
 
@@ -19,7 +19,8 @@ def register(sub) -> None:
                        description=__doc__ + "\n\n" + EXAMPLES,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--house", default="house1", help="house name or .toml (default house1)")
-    p.add_argument("--recording", type=Path, help="CSV with a 'time' column [s], or a gateway recording directory")
+    p.add_argument("--recording", type=Path, help="CSV with a 'time' column [s], a `twin serve --record` "
+                   "directory, or a directory with columns.toml (profiles/recording.py)")
     p.add_argument("--map", type=Path, help="columns.toml: [recording] start, [columns], [units]")
     p.add_argument("--start", help="date of time = 0 (overrides the mapping)")
     p.add_argument("--out", type=Path, default=Path("report"), help="report directory (default report/)")

@@ -9,6 +9,7 @@ import numpy as np
 
 from plant.errors import ConfigError
 from plant.units import UNITS
+from profiles.recording import write_csv
 
 SIM_EXAMPLES = """examples:
   twin simulate house1 --start 2021-01-10 --days 7 --step 1 --out run.csv --plot run.png
@@ -75,7 +76,7 @@ def simulate(args) -> int:
     bar.close()
     names = house.catalogue.names
     if args.out:
-        write_csv(args.out, times, rows, names)
+        write_csv(args.out, times, {n: rows[:, i] for i, n in enumerate(names)})
         print(f"wrote {args.out} ({len(times)} rows x {len(names)} signals)")
     if args.plot:
         plot(args.plot, times, rows, names)
@@ -84,12 +85,6 @@ def simulate(args) -> int:
           f"({duration / wall:,.0f}x real time)")
     print_balance(house.ledger())
     return 0
-
-
-def write_csv(path: Path, times: np.ndarray, rows: np.ndarray, names: list[str]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    data = np.column_stack([times, rows])
-    np.savetxt(path, data, delimiter=",", header=",".join(["time"] + names), comments="", fmt="%.6g")
 
 
 def print_balance(L: dict) -> None:

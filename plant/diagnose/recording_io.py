@@ -1,37 +1,28 @@
-"""Read a lab recording for `twin diagnose`: CSV + columns.toml, or a gateway recording directory.
+"""Samples for `twin diagnose`: a recording read by profiles/recording.py, repaired, in catalogue units.
 
-CSV: a `time` column in seconds since the recording start plus user columns. The mapping file:
-
-    [recording]
-    start = "2021-01-10"            # date (or YYYY-MM-DDTHH:MM) of time = 0, local standard time
-    [columns]
-    "TS_CHP_out" = "chp.T_sup"      # user column -> catalogue signal
-    [units]
-    "TS_CHP_out" = "degC"           # any unit of the signal's kind in plant/units.py (K, l/min, kW, % ...)
-
-A gateway run directory (signals.csv, events.csv, meta.json) needs no mapping: its columns are
-catalogue names in catalogue units and meta.json holds the start.
+Any recording profiles.recording.read_recording reads: a run directory (signals.csv, events.csv,
+meta.json: columns are catalogue names in catalogue units, meta.json holds the start), a CSV with
+a `time` column [s] through a columns file ([recording] start, [columns] "user column" =
+"catalogue signal", [units] "user column" = unit of plant/units.py), a directory holding
+columns.toml (`twin make-recording`), or a CSV whose columns are catalogue names.
 
 Bad input is repaired with a warning that says what was done, or rejected (ConfigError/DataError)
 with a message that says why: unsorted timestamps are sorted, duplicate timestamps keep the last
 row, gaps longer than 3 median intervals are held (commands) and excluded from scoring, NaN
 samples of measured signals are excluded, NaN commands are held; unknown columns are ignored;
-units that are unknown or whose values are implausible for the unit are rejected.
+units that are unknown, of another kind than the signal's, or whose values are implausible for
+the unit are rejected.
 """
 from __future__ import annotations
 
-import csv
-import json
 from dataclasses import dataclass, field
 from difflib import get_close_matches
 from pathlib import Path
 
 import numpy as np
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover
-    import tomli as tomllib
+from profiles.recording import COLUMNS_FILE, read_recording, write_columns
+from profiles.recording import write_csv as write_table
 
 from .. import units as unit_table
 from ..catalogue import CATALOGUE
@@ -42,7 +33,7 @@ PLAUSIBLE = {"degC": (-40.0, 130.0), "kg/s": (-5.0, 5.0), "W": (-2e5, 2e5), "V":
 
 
 @dataclass
-class Recording:
+class Samples:
     """Samples in catalogue units: time [s since start], data {signal: array} (NaN = missing)."""
 
     source: str
@@ -60,122 +51,69 @@ class Recording:
         return len(self.time)
 
 
-def _read_csv(path: Path) -> tuple[list[str], np.ndarray]:
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    if not rows:
-        raise DataError(f"{path}: empty file")
-    header = [h.strip() for h in rows[0]]
-    body = []
-    bad = 0
-    for r in rows[1:]:
-        if not r or all(not c.strip() for c in r):
-            continue
-        if len(r) != len(header):
-            bad += 1
-            continue
-        vals = []
-        for c in r:
-            c = c.strip()
-            try:
-                vals.append(float(c) if c not in ("", "nan", "NaN", "NA") else np.nan)
-            except ValueError:
-                vals.append(np.nan)
-        body.append(vals)
-    data = np.array(body, dtype=float) if body else np.zeros((0, len(header)))
-    if bad:
-        data = data  # reported by the caller
-    return header, data, bad
-
-
-def read_mapping(path: str | Path) -> dict:
-    p = Path(path)
-    if not p.exists():
-        raise ConfigError(f"{p}: no such mapping file")
-    try:
-        doc = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
-    if "columns" not in doc or not isinstance(doc["columns"], dict):
-        raise ConfigError(f"{p}: needs a [columns] table: \"user column\" = \"signal.name\"")
-    return doc
-
-
 def load(path: str | Path, mapping: str | Path | None = None, start: str | None = None,
-         house_start: str = "2021-01-10") -> Recording:
-    """Read a CSV (+ mapping) or a gateway recording directory; repair or reject bad input."""
+         house_start: str = "2021-01-10") -> Samples:
+    """Read a recording (+ columns file) through profiles.recording; repair or reject bad input."""
     p = Path(path)
     warnings: list[str] = []
-    if p.is_dir():
-        from gateway.recording.reader import read_recording
-
-        rec = read_recording(p)
-        header = ["time"] + rec.names
-        raw = np.column_stack([rec.time, rec.values]) if len(rec.time) else np.zeros((0, len(header)))
+    run = p.is_dir() and (p / "signals.csv").exists()
+    if mapping is None and p.is_dir() and not run:
+        mapping = p / COLUMNS_FILE
+    rec = read_recording(p, mapping)
+    header = ["time"] + rec.names
+    raw = np.column_stack([rec.time, rec.values])
+    if mapping is None:
+        # columns named like catalogue signals need no mapping (catalogue units assumed)
         colmap = {n: n for n in rec.names if n in CATALOGUE}
         units = {n: CATALOGUE.signal(n).unit for n in colmap}
-        for n in rec.names:
-            if n not in CATALOGUE:
-                warnings.append(f"column {n!r}: not a catalogue signal; ignored")
-        start = start or rec.meta.get("start")
-        bad = 0
+        ignored = [n for n in rec.names if n not in CATALOGUE]
+        if run:
+            warnings += [f"column {n!r}: not a catalogue signal; ignored" for n in ignored]
+        elif not colmap:
+            raise ConfigError(f"{p}: no column is a catalogue signal name; pass --map columns.toml")
+        elif ignored:
+            warnings.append("columns not in the catalogue ignored: " + ", ".join(ignored))
     else:
-        if not p.exists():
-            raise ConfigError(f"{p}: no such recording")
-        header, raw, bad = _read_csv(p)
-        if "time" not in header:
-            raise DataError(f"{p}: needs a 'time' column in seconds; columns are: {', '.join(header[:12])}")
-        if mapping is None:
-            # columns named like catalogue signals need no mapping (catalogue units assumed)
-            colmap = {h: h for h in header if h in CATALOGUE}
-            units = {h: CATALOGUE.signal(h).unit for h in colmap}
-            if not colmap:
-                raise ConfigError(f"{p}: no column is a catalogue signal name; pass --map columns.toml")
-            if any(h not in colmap and h != "time" for h in header):
-                warnings.append("columns not in the catalogue ignored: "
-                                + ", ".join(h for h in header if h not in colmap and h != "time"))
-        else:
-            doc = read_mapping(mapping)
-            colmap = {}
-            problems = []
-            for col, sig in doc["columns"].items():
-                if sig not in CATALOGUE:
-                    close = get_close_matches(str(sig), CATALOGUE.names, n=2)
-                    problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
-                                    + (f"; did you mean {', '.join(close)}?" if close else
-                                       "; list them with `twin signals house1`"))
-                    continue
-                if col not in header:
-                    close = get_close_matches(col, header, n=2)
-                    problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
-                                    + (f"; did you mean {', '.join(close)}?" if close else ""))
-                    continue
-                colmap[col] = sig
-            units = {}
-            for col, sig in colmap.items():
-                u = doc.get("units", {}).get(col)
-                cat_unit = CATALOGUE.signal(sig).unit
-                if u is None:
-                    units[col] = cat_unit
-                    continue
-                if u not in unit_table.UNITS:
-                    problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
-                                    + ", ".join(sorted(n for n in unit_table.UNITS if n)))
-                    continue
-                if not unit_table.convertible(u, cat_unit):
-                    problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
-                                    f"(a {cat_unit} signal)")
-                    continue
-                units[col] = u
-            if problems:
-                raise ConfigError("\n".join(problems))
-            extra = [h for h in header if h != "time" and h not in colmap]
-            if extra:
-                warnings.append(f"{len(extra)} column(s) not in the mapping ignored: " + ", ".join(extra[:8])
-                                + (" ..." if len(extra) > 8 else ""))
-            start = start or doc.get("recording", {}).get("start")
-        if bad:
-            warnings.append(f"{bad} row(s) with the wrong number of fields dropped")
+        colmap = {}
+        problems = []
+        for col, sig in rec.signals.items():
+            if sig not in CATALOGUE:
+                close = get_close_matches(str(sig), CATALOGUE.names, n=2)
+                problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
+                                + (f"; did you mean {', '.join(close)}?" if close else
+                                   "; list them with `twin signals house1`"))
+                continue
+            if col not in rec.names:
+                close = get_close_matches(col, rec.names, n=2)
+                problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
+                                + (f"; did you mean {', '.join(close)}?" if close else ""))
+                continue
+            colmap[col] = sig
+        units = {}
+        for col, sig in colmap.items():
+            u = rec.units.get(col)
+            cat_unit = CATALOGUE.signal(sig).unit
+            if u is None:
+                units[col] = cat_unit
+                continue
+            if u not in unit_table.UNITS:
+                problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
+                                + ", ".join(sorted(n for n in unit_table.UNITS if n)))
+                continue
+            if not unit_table.convertible(u, cat_unit):
+                problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
+                                f"(a {cat_unit} signal)")
+                continue
+            units[col] = u
+        if problems:
+            raise ConfigError("\n".join(problems))
+        extra = [h for h in rec.names if h not in colmap]
+        if extra:
+            warnings.append(f"{len(extra)} column(s) not in the mapping ignored: " + ", ".join(extra[:8])
+                            + (" ..." if len(extra) > 8 else ""))
+    start = start or rec.start
+    if rec.dropped_rows:
+        warnings.append(f"{rec.dropped_rows} row(s) with the wrong number of fields dropped")
     if raw.shape[0] < 3:
         raise DataError(f"{p}: fewer than 3 samples")
     if not start:
@@ -245,22 +183,17 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
                 warnings.append(f"{sig}: {int(nan.sum())} missing command sample(s) held at the last value")
             else:
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
-    return Recording(str(p), str(start), t, data, warnings, valid,
-                     {sig: col for col, sig in colmap.items()})
+    return Samples(str(p), str(start), t, data, warnings, valid,
+                   {sig: col for col, sig in colmap.items()})
 
 
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,
               start: str | None = None, units: dict | None = None, columns: dict | None = None) -> None:
-    """Write a recording as CSV (+ columns.toml); columns {signal: user column} renames them."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write samples as CSV (+ columns file); columns {signal: user column} renames them."""
     names = list(data)
     cols = [(columns or {}).get(n, n) for n in names]
-    arr = np.column_stack([time] + [data[n] for n in names])
-    np.savetxt(path, arr, delimiter=",", header=",".join(["time"] + cols), comments="", fmt="%.6g")
+    write_table(path, time, {c: data[n] for c, n in zip(cols, names)})
     if mapping_path:
-        lines = ["[recording]", f'start = "{start or "2021-01-10"}"', "", "[columns]"]
-        lines += [f'"{c}" = "{n}"' for c, n in zip(cols, names)]
-        lines += ["", "[units]"]
-        lines += [f'"{c}" = "{(units or {}).get(n, CATALOGUE.signal(n).unit)}"' for c, n in zip(cols, names)]
-        Path(mapping_path).write_text("\n".join(lines) + "\n")
+        write_columns(mapping_path, dict(zip(cols, names)),
+                      {c: (units or {}).get(n, CATALOGUE.signal(n).unit) for c, n in zip(cols, names)},
+                      start=start)

@@ -1,6 +1,6 @@
 """Synthetic lab-like recordings from the twin with a KNOWN injected effect (tests, benchmark).
 
-    rec = synth.make("idle_generator_flow", 0.25, days=3)   # -> recording_io.Recording
+    rec = synth.make("idle_generator_flow", 0.25, days=3)   # -> recording_io.Samples
     synth.write("storage_mixing", 2000.0, "case.csv", "columns.toml", days=7)
 
 The 'truth' is the twin with its rule-based controller and the effect injected (a house-file
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..catalogue import CATALOGUE
-from .recording_io import Recording, write_csv
+from .recording_io import Samples, write_csv
 from .replay import BOUNDARY, COMMANDS
 
 # a lab-like sensor set (the CoSES lab measures these; chp.m_flow is concealed by default)
@@ -44,7 +44,7 @@ CASES = {
 
 def make(effect: str = "none", size: float | None = None, days: float = 3.0, start: str = "2021-01-10",
          interval: float = 60.0, seed: int = 1, signals=None, noise: bool = True,
-         conceal=("chp.m_flow",), base: dict | None = None) -> Recording:
+         conceal=("chp.m_flow",), base: dict | None = None) -> Samples:
     """base: house-file overrides of the operating conditions (e.g. a low heating set-point, so
     that the mixing valve closes), applied with and without the effect alike."""
     kind, key, default = CASES[effect]
@@ -81,11 +81,11 @@ def make(effect: str = "none", size: float | None = None, days: float = 3.0, sta
             if q:
                 v = np.round(v / q) * q
         data[s] = v
-    return Recording(f"synthetic:{effect}={size}", start, times.copy(), data, [],
-                     np.ones(len(times), dtype=bool), {})
+    return Samples(f"synthetic:{effect}={size}", start, times.copy(), data, [],
+                   np.ones(len(times), dtype=bool), {})
 
 
-def write(effect: str, size: float | None, csv_path, mapping_path, **kw) -> Recording:
+def write(effect: str, size: float | None, csv_path, mapping_path, **kw) -> Samples:
     rec = make(effect, size, **kw)
     write_csv(csv_path, rec.time, rec.data, mapping_path, start=rec.start)
     return rec

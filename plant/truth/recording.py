@@ -1,9 +1,9 @@
 """Lab-like recordings of house 1 with known effects: the test data of `twin diagnose`.
 
     meta = make_recording("concealed_idle_flow", out="rec/", days=7, start="2021-01-10", seed=1)
-    times, data, units = read_recording("rec/")        # user columns, as written
+    rec = profiles.recording.read_recording("rec/")    # user columns, as written
 
-A recording directory holds
+A recording directory (read by profiles/recording.py, the one reader) holds
   * recording.csv (recording.csv.gz if larger than 2 MB): `time` in seconds since the start
     (00:00 local standard time of `start`), then lab-tag columns (COLUMNS below);
   * columns.toml: [recording] start, [columns] "user column" = "catalogue signal",
@@ -38,8 +38,6 @@ Cases (magnitude = the case's one knob; default in CASES):
 """
 from __future__ import annotations
 
-import gzip
-import io
 import json
 import math
 import time as _time
@@ -47,6 +45,8 @@ from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
+
+from profiles.recording import write_columns, write_csv
 
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
@@ -214,24 +214,12 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
     out.mkdir(parents=True, exist_ok=True)
     for old in ("recording.csv", "recording.csv.gz"):
         (out / old).unlink(missing_ok=True)
-    buf = io.StringIO()
-    buf.write(",".join(["time"] + [c[0] for c in COLUMNS]) + "\n")
     fmts = ["%.3f"] + [FMT[c[3]] for c in COLUMNS]
-    np.savetxt(buf, np.column_stack([t_logged] + [data[c[0]] for c in COLUMNS]), delimiter=",",
-               fmt=fmts)
-    text = buf.getvalue()
-    if len(text) > GZIP_ABOVE:
-        csv_name = "recording.csv.gz"
-        with gzip.open(out / csv_name, "wt", compresslevel=9) as fh:
-            fh.write(text)
-    else:
-        csv_name = "recording.csv"
-        (out / csv_name).write_text(text)
-    toml = ["# lab tag -> twin catalogue signal (`twin signals house1`) and the column's unit",
-            "[recording]", f'start = "{start}"', f'file = "{csv_name}"', "", "[columns]"]
-    toml += [f'"{c[0]}" = "{c[1]}"' for c in COLUMNS] + ["", "[units]"]
-    toml += [f'"{c[0]}" = "{c[2]}"' for c in COLUMNS]
-    (out / "columns.toml").write_text("\n".join(toml) + "\n")
+    csv_name = write_csv(out / "recording.csv", t_logged, {c[0]: data[c[0]] for c in COLUMNS}, fmts,
+                         gzip_above=GZIP_ABOVE).name
+    write_columns(out / "columns.toml", {c[0]: c[1] for c in COLUMNS}, {c[0]: c[2] for c in COLUMNS},
+                  start=start, file=csv_name,
+                  comment="lab tag -> twin catalogue signal (`twin signals house1`) and the column's unit")
 
     meta = {
         "case": case, "description": CASES[case][0], "magnitude": mag,
@@ -290,23 +278,3 @@ def effect_sizes(truth: dict, sample: float) -> dict:
     e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow"].sum() * sample / KWH)
     e["chp_running_hours"] = float(on.sum() * sample / 3600.0)
     return e
-
-
-def read_recording(path: str | Path):
-    """(time [s], {column: values}, {column: unit}, start) of a recording directory (csv or csv.gz)."""
-    import csv
-
-    try:
-        import tomllib
-    except ModuleNotFoundError:  # pragma: no cover
-        import tomli as tomllib
-    p = Path(path)
-    doc = tomllib.loads((p / "columns.toml").read_text())
-    f = p / doc.get("recording", {}).get("file", "recording.csv")
-    opener = gzip.open if f.suffix == ".gz" else open
-    with opener(f, "rt", newline="") as fh:
-        rows = list(csv.reader(fh))
-    header = rows[0]
-    arr = np.array(rows[1:], dtype=float)
-    data = {h: arr[:, i] for i, h in enumerate(header) if h != "time"}
-    return arr[:, header.index("time")], data, doc["units"], doc.get("recording", {}).get("start")

@@ -76,7 +76,7 @@ def test_unknown_unit_and_wrong_unit_rejected(tmp_path, rec):
 
 def test_missing_command_rejected_with_requirements(tmp_path, rec):
     data = {k: v for k, v in rec.data.items() if k != "boiler.U_set"}
-    r = recording_io.Recording("x", rec.start, rec.time, data, [], None, {})
+    r = recording_io.Samples("x", rec.start, rec.time, data, [], None, {})
     with pytest.raises(ConfigError, match="boiler.U_set") as exc:
         replay.check(r)
     assert "must contain" in str(exc.value)

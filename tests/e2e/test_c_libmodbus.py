@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 
-from gateway.recording import read_recording
+from profiles.recording import read_recording
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from tests.conftest import require_tool
 

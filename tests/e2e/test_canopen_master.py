@@ -1,5 +1,5 @@
 """canopen-master example against the gateway's CANopen nodes (virtual bus) for one winter day."""
-from gateway.recording import read_recording
+from profiles.recording import read_recording
 
 from .conftest import DAY, SCAN, check_against_offline, load_example, make_runtime, recorded_kpis
 

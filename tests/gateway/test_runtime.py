@@ -10,7 +10,7 @@ from pymodbus.client import ModbusTcpClient
 
 from gateway.clock import LockStepClock
 from gateway.faults import Fault, load_scenario
-from gateway.recording import read_recording
+from profiles.recording import read_recording
 from gateway.runtime import Runtime
 from plant.errors import ConfigError
 from plant.house import load_house

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from plant.catalogue import CATALOGUE
-from plant.truth.recording import COLUMNS, NOISE, make_recording, read_recording
+from plant.truth.recording import COLUMNS, NOISE, make_recording
+from profiles.recording import read_recording
 
 SHIPPED = Path(__file__).resolve().parents[2] / "profiles" / "recordings" / "concealed_idle_flow"
 
@@ -20,10 +21,11 @@ def rec(tmp_path_factory):
 
 def test_declared_columns_units_and_mapping(rec):
     out, meta = rec
-    t, data, units, start = read_recording(out)
+    rec = read_recording(out)
+    t, data, units, start = rec.time, rec.data, rec.units, rec.start
     assert start == "2021-01-10" and list(data) == [c[0] for c in COLUMNS]
     for col, sig, unit, _ in COLUMNS:
-        assert sig in CATALOGUE and units[col] == unit
+        assert sig in CATALOGUE and units[col] == unit and rec.signals[col] == sig
     assert len(t) == meta["rows"] == 720
     for col in ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set"):
         assert col in [c[1] for c in COLUMNS]  # replay inputs
@@ -32,7 +34,8 @@ def test_declared_columns_units_and_mapping(rec):
 
 def test_jitter_noise_and_quantisation(rec):
     out, meta = rec
-    t, data, _, _ = read_recording(out)
+    rec = read_recording(out)
+    t, data = rec.time, rec.data
     d = np.diff(t)
     assert np.all(d > 0) and d.std() > 0.3 and np.abs(d - 60).max() <= 2 * 2 + 1
     assert np.any(np.abs(t - 60 * np.round(t / 60)) > 0.01)  # not on a grid
@@ -52,7 +55,8 @@ def test_nominal_case_uses_the_twin(tmp_path):
 
 def test_shipped_recording_reads_back_and_matches_its_meta():
     meta = json.loads((SHIPPED / "meta.json").read_text())
-    t, data, units, start = read_recording(SHIPPED)
+    rec = read_recording(SHIPPED)
+    t, data, start = rec.time, rec.data, rec.start
     assert len(t) == meta["rows"] == 10080 and start == meta["start"] == "2021-01-10"
     assert meta["case"] == "concealed_idle_flow" and meta["seed"] == 1
     e = meta["effect"]
