@@ -3,12 +3,10 @@
 The original models mix cp = 4180 (generators) and 4177 J/(kg K) (storage, hydraulics); the
 0.07 % difference would break an exact energy ledger, so the whole plant uses one value.
 """
-import numpy as np
 from numba import njit
 
 CP = 4180.0  # J/(kg K)
-RHO = 1000.0  # kg/m3, used to convert volumes and l/min into kg and kg/s
-KG_PER_L_MIN = RHO / 60000.0  # 1 l/min in kg/s
+RHO = 1000.0  # kg/m3: volumes into kg; plant/units.py converts l/min, m3/h ... into kg/s with it
 
 
 @njit(cache=True)
@@ -16,6 +14,3 @@ def density(T):
     """Density of water [kg/m3] at T [degC] (fit to the IAPWS table, 0-100 degC, error < 0.05 kg/m3)."""
     return 1000.0 * (1.0 - (T + 288.9414) / (508929.2 * (T + 68.12963)) * (T - 3.9863) ** 2)
 
-
-def l_min_to_kg_s(v):
-    return np.asarray(v) * KG_PER_L_MIN
