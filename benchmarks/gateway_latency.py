@@ -1,18 +1,19 @@
 """Modbus TCP read latency of the gateway against a bare pymodbus server and a libmodbus C server.
 
-Three servers, each in its own process on loopback: the gateway (`twin serve house1 --speed 1`,
-the plant stepping in real time), a bare pymodbus server and a minimal libmodbus server
-(benchmarks/c/modbus_server.c, built here with gcc and pkg-config). Two clients, each its own
-process: a pymodbus sync client and a libmodbus C client (benchmarks/c/modbus_client.c). A client
-reads 10 input registers from every server in interleaved rounds (round r: gateway, bare, C, with
-the starting server rotating), so that the machine's noise falls on all three alike.
+Servers, each in its own process on loopback: the gateway (`twin serve house1 --speed 1`, the
+plant stepping in real time) on asyncio's event loop and, if installed, on uvloop; a bare pymodbus
+server (asyncio); a minimal libmodbus server (benchmarks/c/modbus_server.c, built here with gcc and
+pkg-config). Two clients, each its own process: a pymodbus sync client and a libmodbus C client
+(benchmarks/c/modbus_client.c). A client reads 10 input registers from every server in
+interleaved rounds (round r: gateway, bare, C, ... with the first server rotating), so that the
+machine's noise falls on all of them alike.
 
 Where the processes run decides the figures (a loopback round trip within one CPU is a third of
 one across two), so both pinnings are measured in the same run: "across CPUs" (client on CPU 0,
 servers on CPU 1) and "same CPU" (all on CPU 0). Every (pinning, client) run is repeated; the
 figures are the median of the repeat medians with their min-max, ratios are taken within a run.
 Then 20 clients poll the gateway at 10 Hz each and the gateway's step lateness p99 is read from
-its own report (target < 5 ms). See benchmarks/README.md for the method.
+its own report (target < 5 ms). docs/design.md (Gateway latency) explains the method.
 Run: python benchmarks/gateway_latency.py [--rounds 2000] [--repeats 5] [--poll-seconds 20]
 """
 import argparse
@@ -220,6 +221,10 @@ def main() -> None:
         for port in ports.values():
             wait_port(port)
         targets = [f"127.0.0.1:{ports[s]}/{UNIT}" for s in procs]
+        for _ in range(60):  # every server answers one read before the timing starts
+            if subprocess.run([str(exe["modbus_client"]), "-v", "-r", "0", *targets], capture_output=True).returncode == 0:
+                break
+            time.sleep(0.5)
         med = latency(procs, exe, targets, args.rounds, args.repeats)
         res = report(med, args.rounds, args.repeats)
         for proc in procs.values():
