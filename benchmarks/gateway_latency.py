@@ -102,9 +102,12 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def wait_port(port: int, timeout: float = 60.0) -> None:
+def wait_port(port: int, timeout: float = 60.0, proc: subprocess.Popen | None = None) -> None:
     end = time.time() + timeout
     while time.time() < end:
+        if proc is not None and proc.poll() is not None:
+            out = proc.communicate()[0] if proc.stdout else ""
+            raise RuntimeError(f"server for port {port} exited with {proc.returncode}: {(out or '').strip()[-2000:]}")
         try:
             with socket.create_connection(("127.0.0.1", port), timeout=0.5):
                 return
@@ -218,8 +221,8 @@ def main() -> None:
                                          stdout=subprocess.DEVNULL)
     default = f"gateway {loops[-1]}"  # what `twin serve` runs on here (--loop auto)
     try:
-        for port in ports.values():
-            wait_port(port)
+        for name, port in ports.items():
+            wait_port(port, proc=procs[name])
         targets = [f"127.0.0.1:{ports[s]}/{UNIT}" for s in procs]
         for _ in range(60):  # every server answers one read before the timing starts
             if subprocess.run([str(exe["modbus_client"]), "-v", "-r", "0", *targets], capture_output=True).returncode == 0:
