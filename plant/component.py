@@ -86,3 +86,35 @@ def index_of(params_cls) -> dict[str, int]:
 
 
 __all__ = ["param", "describe", "build_params", "pack", "index_of", "dataclass", "dataclasses"]
+
+
+class Kind:
+    """A component kind as the compiler sees it (plant/compiler.py): its parameters, the link
+    keys a house file may give beside them, and the code it emits into the step's phases.
+
+    LINKS maps each link key to (default, meaning); a default of REQUIRED must be given. A kind
+    that carries water between others implements the protocol its role needs:
+      generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals
+      consumer   emit_consumer(c, inst, T_sup) -> (m_flow, T_return expression for `volumes`)
+      emitter    emit_emitter(c, inst, m_flow, T_sup) -> T_return local
+    """
+
+    name = ""
+    Params = None
+    LINKS: dict = {}
+    REFS: dict = {}          # link key -> role of the instance(s) it names (checked by the declaration)
+    role = "component"       # generator | consumer | storage | emitter | zone | controller | ...
+
+    def initial_state(self, inst) -> np.ndarray:
+        return np.zeros(0)
+
+    def emit(self, c, inst) -> None:
+        """Code of the instance's own phases (a generator or consumer emits when its coupling
+        point calls it)."""
+
+    def stored_energy(self, inst, x: np.ndarray) -> float:
+        """Heat held in the instance's water relative to 0 degC [J] (energy ledger)."""
+        return 0.0
+
+
+REQUIRED = object()

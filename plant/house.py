@@ -1,4 +1,4 @@
-"""House: a simulated house assembled from its house file, stepped in SI units.
+"""House: a house declaration compiled into one step (plant/compiler.py), stepped in SI units.
 
     house = load_house("house1")                 # or a path to a .toml
     house.step(60.0)                             # advance 60 s (split into steps <= 5 s)
@@ -7,215 +7,210 @@
     house.release("boiler.U_set")                # ... and hand it back to the built-in control
     times, rows = house.run(86400, dt=1.0, out_interval=60.0)
 
-Deterministic: the same house file, start and inputs give the same results bit for bit.
-Not thread-safe: callers that serve it to several clients serialise access.
-
-Heating storage as an FMU ([storage] fmu = ... in the house file, see plant/housefile.py): every
-internal step then runs solver.before_storage (compiled), the FMU's doStep through
-plant.fmu.component.FmuComponent, and solver.after_storage (compiled), from Python - the same
-clock and step order as the native loop, about 100x slower.  The FMU's T_out and Q_loss enter
-the ledger; its T_layer outputs are the storage state (sensors, SOC, stored energy).
-snapshot/restore are not available then (the FMU's state cannot be copied).
+This is the Plant protocol every user outside plant/ relies on: step/advance, get/set/release,
+drive (a command table), snapshot/restore, ledger, the catalogue. Deterministic: the same house
+file, start and inputs give the same results bit for bit. Not thread-safe: callers that serve it
+to several clients serialise access.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from profiles import loaders
-
-from . import housefile, solver
-from .catalogue import CATALOGUE
-from .component import pack
-from .components import boiler, chp, mixing_station, pipe, radiator, storage, zone
-from .controllers import room_thermostat, rule_based
+from . import boundary, compiler, declaration
+from .compiler import Instance
 from .errors import ConfigError
-from .water import CP, RHO
+from .schedule import n_steps
 
-_INPUT_NAMES = tuple(s.name for s in CATALOGUE.inputs())  # named in the error for a non-input
-
-if TYPE_CHECKING:  # a house whose plant is an FMU (topology = "fmu")
-    from .fmu.house import FmuHouse
-
-STATE_ORDER = ("chp", "boiler", "storage", "dhw_storage", "zone", "radiator", "mixer",
-               "supply_header", "return_header", "controller", "thermostat")
 CONTROLLERS = ("rule_based", "external")
-# inputs the case-study controller drives; "external" hands them to the gateway from the start
-SUPERVISORY_INPUTS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on")
+SUPERVISORY = ("rule_based",)  # controller kinds whose commands "external" hands to the gateway
 
 
 @dataclass(frozen=True)
 class Snapshot:
     t: float
-    states: tuple
+    x: np.ndarray
     signals: np.ndarray
     remote: np.ndarray
     ledger: np.ndarray
 
 
+def load_spec(name_or_path: str | Path = "house1", overrides: dict | None = None):
+    """Read and check a house file without building it: a Declaration (native house) or an
+    FmuHouseSpec ([house] topology = "fmu"); every problem of the file at once."""
+    path = declaration.resolve(name_or_path)
+    doc = declaration.read(path)
+    if isinstance(doc.get("house"), dict) and doc["house"].get("topology") == "fmu":
+        from .fmu.housefile import load as load_fmu
+
+        if overrides:
+            raise ConfigError(f"{path}: overrides ({', '.join(overrides)}) apply to native houses only; "
+                              "this house's plant is an FMU ([house] topology = \"fmu\")")
+        return load_fmu(path)
+    decl = declaration.load(path, overrides)
+    compiler.catalogue_of(path, overrides)  # the compiler's checks (ports, links, signals)
+    return decl
+
+
 def load_house(name_or_path: str | Path = "house1", start: str | None = None,
-               controller: str = "rule_based", overrides: dict | None = None) -> "House | FmuHouse":
+               controller: str = "rule_based", overrides: dict | None = None):
     """Assemble a house from its file; every problem is reported before the first step.
 
-    overrides: {"section.key": value}, e.g. {"storage.UA_loss": 25.0,
-    "connections.idle_flow_chp": 0.2}, validated like the file's own values.
+    overrides: {"instance.key": value}, e.g. {"storage.UA_loss": 25.0,
+    "switch.idle_flow.chp": 0.2}, validated like the file's own values.
     A house file with [house] topology = "fmu" gives an FmuHouse (plant/fmu/house.py).
     """
-    spec = housefile.load(name_or_path, overrides)
-    if isinstance(spec, housefile.FmuHouseSpec):
+    path = declaration.resolve(name_or_path)
+    doc = declaration.read(path)
+    if isinstance(doc.get("house"), dict) and doc["house"].get("topology") == "fmu":
         from .fmu.house import FmuHouse
 
-        return FmuHouse(spec, start=start, controller=controller)
-    return House(spec, start=start, controller=controller)
+        return FmuHouse(load_spec(path, overrides), start=start, controller=controller)
+    return House(declaration.load(path, overrides), start=start, controller=controller)
 
 
 class House:
-    def __init__(self, spec: housefile.HouseSpec, start: str | None = None, controller: str = "rule_based"):
+    def __init__(self, decl: declaration.Declaration, start: str | None = None,
+                 controller: str = "rule_based"):
         if controller not in CONTROLLERS:
             raise ConfigError(f"controller = {controller!r}: unknown; allowed: {', '.join(CONTROLLERS)}")
-        self.spec = spec
-        self.name = spec.name
-        self.catalogue = CATALOGUE
-        self.start = start or spec.start
-        P = spec.params
-        self._params = P
-        modules = {"chp": chp, "boiler": boiler, "storage": storage, "dhw_storage": storage,
-                   "zone": zone, "radiator": radiator, "mixer": mixing_station,
-                   "supply_header": pipe, "return_header": pipe, "controller": rule_based,
-                   "thermostat": room_thermostat}
-        self._x0 = tuple(np.ascontiguousarray(modules[k].initial_state(P[k]), dtype=np.float64)
-                         for k in STATE_ORDER)
-        c = spec.connections
-        st, dw = P["storage"], P["dhw_storage"]
-        sys = np.zeros(solver.N_SYS)
-        sys[solver.SYS_M_DHW_PUMP] = c.dhw_pump_flow
-        sys[solver.SYS_SOC_T0], sys[solver.SYS_SOC_TMAX] = c.storage_soc_T0, c.storage_soc_Tmax
-        sys[solver.SYS_DHW_SOC_T0], sys[solver.SYS_DHW_SOC_TMAX] = c.dhw_soc_T0, c.dhw_soc_Tmax
-        sys[solver.SYS_DHW_COIL_UA] = c.dhw_coil_UA
-        for key, name in ((solver.SYS_CHP_X_STARTS, "starts"), (solver.SYS_CHP_X_RUNSEC, "run_seconds"),
-                          (solver.SYS_CHP_X_EEL, "E_el"), (solver.SYS_CHP_X_EHEAT, "E_heat"),
-                          (solver.SYS_CHP_X_EFUEL, "E_fuel")):
-            sys[key] = chp.STATES.index(name)
-        for key, name in ((solver.SYS_B_X_STARTS, "starts"), (solver.SYS_B_X_RUNSEC, "run_seconds"),
-                          (solver.SYS_B_X_EHEAT, "E_heat"), (solver.SYS_B_X_EFUEL, "E_fuel"),
-                          (solver.SYS_B_X_Y, "y")):
-            sys[key] = boiler.STATES.index(name)
-        if spec.typeday:  # a type-day block: time 0 = the block's first midnight
-            sys[solver.SYS_TAU0] = loaders.typeday_offset(spec.typeday)
-        else:
-            sys[solver.SYS_TAU0] = loaders.start_offset(self.start)
-        sys[solver.SYS_IDLE_FLOW_CHP] = c.idle_flow_chp
-        sys[solver.SYS_PUMP_COUPLING_CHP] = c.pump_coupling_chp
-        mix_layers = c.storage_inlet_mixing / (st.volume / st.n_layers)
-        sys[solver.SYS_ST_INLET_MIX] = mix_layers
-        n_in = 1 + math.ceil(mix_layers - 1e-12) if mix_layers > 0.0 else 1
-        sys[solver.SYS_ST_TOP_LAYER] = storage.port_layer(c.storage_top_port, st)
-        sys[solver.SYS_ST_BOTTOM_LAYER] = storage.port_layer(c.storage_bottom_port, st)
-        self._p = tuple(pack(P[k]) for k in STATE_ORDER) + (pack(P["dhw"]), sys)
-        self._tabs = tuple(np.ascontiguousarray(a, dtype=np.float64) for a in chp.tables() + boiler.tables())
-        if spec.typeday:
-            td = loaders.typeday(spec.typeday, spec.household_kwh_per_year, spec.dhw_litres_per_day)
-            w, pres, pel, draw = td, td["presence"], td["P_el"], td["draw"]
-        else:
-            w = loaders.weather()
-            pres = loaders.presence()
-            pel = loaders.electricity(spec.household_kwh_per_year)
-            draw = loaders.hot_water(spec.dhw_litres_per_day)
-        self._prof = ((w["T_air"].values, w["E_dir"].values, w["E_dif"].values, pres.values,
-                       pel.values, draw.values),
-                      (w["T_air"].step, pres.step, pel.step, draw.step))
-        n_max = max(st.n_layers, dw.n_layers)
-        i64 = lambda *v: np.array(v, dtype=np.int64)  # noqa: E731
-        f64 = lambda n: np.zeros(n, dtype=np.float64)  # noqa: E731
-        self._ports = (
-            (np.zeros(n_in, dtype=np.int64), i64(0)),
-            (f64(n_in), f64(n_in), f64(1), f64(1), f64(1), f64(1), f64(1), f64(1), f64(n_max),
-             f64(1), f64(1), f64(1), f64(1), f64(0)),
-            (i64(storage.port_layer(c.dhw_cold_port, dw)), i64(storage.port_layer(c.dhw_draw_port, dw)),
-             i64(storage.port_layer(c.dhw_coil_top, dw)), i64(storage.port_layer(c.dhw_coil_bottom, dw)),
-             np.zeros(0, dtype=np.int64)),
-        )
+        self.decl = decl
+        self.name = decl.name
+        self.start = start or decl.start
+        weather = Instance("weather", "profiles", None, {"tau0": boundary.tau0(self.start, decl.typeday)},
+                           f"{decl.path} [profiles]", -1)
+        decl = replace(decl, instances={"weather": weather, **{k: v for k, v in decl.instances.items()
+                                                              if k != "weather"}},
+                       prof=boundary.profiles(decl.typeday, decl.household_kwh_per_year,
+                                              decl.dhw_litres_per_day))
+        self.decl = decl
+        plant = compiler.compile_plant(decl)
+        plant.module = compiler.load_module(plant.source)
+        self._plant = plant
+        self.catalogue = plant.catalogue
+        self._inputs = tuple(s.name for s in self.catalogue.inputs())
         self._controller = controller
-        if spec.storage_fmu and n_in > 1:
-            raise ConfigError(f"{spec.path}: [connections] storage_inlet_mixing = {c.storage_inlet_mixing:g}: "
-                              "not with a storage FMU (its ports are one layer each); set it to 0")
-        self._fmu = FmuStorage(spec.storage_fmu, st.n_layers) if spec.storage_fmu else None
+        self._supervised = [n for inst in decl.instances.values() if inst.kind in SUPERVISORY
+                            for n in _output_signals(inst)]
+        from .kinds import KINDS
+
+        self._runtimes = [inst for inst in decl.instances.values() if getattr(KINDS[inst.kind], "runtime", False)]
+        self._running: dict[str, int] = {}
         self.reset()
 
     # --- state -----------------------------------------------------------------------------
     def reset(self) -> None:
+        P = self._plant
         self.t = 0.0
-        self._x = tuple(a.copy() for a in self._x0)
-        if self._fmu is not None:
-            self._fmu.reset(self._x[STATE_ORDER.index("storage")])
-        self._s = np.zeros(len(CATALOGUE))
-        self._remote = np.zeros(len(CATALOGUE), dtype=np.bool_)
-        self._ledger = np.zeros(len(solver.LEDGER_NAMES))
+        self._x = P.x0.copy()
+        self._ia = tuple(a.copy() for a in P.ia)
+        self._fa = tuple(a.copy() for a in P.fa)
+        self._s = np.zeros(len(self.catalogue))
+        self._remote = np.zeros(len(self.catalogue), dtype=np.bool_)
+        self._ledger = np.zeros(len(P.ledger))
+        self._start_runtimes()
         if self._controller == "external":
-            for name in SUPERVISORY_INPUTS:
-                self._remote[CATALOGUE.index(name)] = True
+            for name in self._supervised:
+                self._remote[self.catalogue.index(name)] = True
         self._E0 = self.stored_energy()
         self._advance(0.0, 1)  # one zero-length step fills every signal
-        if abs(self._s[CATALOGUE.index("zone.T_room")] - self._x[4][0]) > 1e-9:
-            raise RuntimeError("compiled plant kernel is stale (signal catalogue changed): delete the "
-                               "__pycache__ folders under plant/ and run again")
+
+    def _start_runtimes(self) -> None:
+        """(Re)start the instances that run outside the compiled step (FMUs) at time 0."""
+        from .kinds import KINDS
+
+        self.close()
+        for inst in self._runtimes:
+            a, b = self._plant.x_slices[inst.name]
+            pa, pb = self._plant.p_slices[inst.name + "_fmu"]
+            self._running[inst.name] = KINDS[inst.kind].start(inst, self._x[a:b], self._plant.p[pa:pb])
 
     def close(self) -> None:
-        """Free the storage FMU's instance (if any); the house cannot step afterwards."""
-        if self._fmu is not None:
-            self._fmu.close()
+        """Free the FMU instances (if any); the house cannot step afterwards."""
+        from .kinds import KINDS
+
+        for inst in self._runtimes:
+            if inst.name in self._running:
+                KINDS[inst.kind].stop(self._running.pop(inst.name))
 
     def snapshot(self) -> Snapshot:
-        if self._fmu is not None:
-            raise ConfigError(f"{self.name}: snapshot/restore are not available while the heating "
-                              "storage is an FMU (its state cannot be copied)")
-        return Snapshot(self.t, tuple(a.copy() for a in self._x), self._s.copy(), self._remote.copy(),
-                        self._ledger.copy())
+        if self._runtimes:
+            raise ConfigError(f"{self.name}: snapshot/restore are not available while "
+                              f"{', '.join(i.name for i in self._runtimes)} runs as an FMU (its state "
+                              "cannot be copied)")
+        return Snapshot(self.t, self._x.copy(), self._s.copy(), self._remote.copy(), self._ledger.copy())
 
     def restore(self, snap: Snapshot) -> None:
         self.t = snap.t
-        self._x = tuple(a.copy() for a in snap.states)
+        self._x = snap.x.copy()
         self._s = snap.signals.copy()
         self._remote = snap.remote.copy()
         self._ledger = snap.ledger.copy()
 
+    def state(self, instance: str) -> np.ndarray:
+        """A copy of one instance's state vector (e.g. the storage layer temperatures, top first)."""
+        if instance not in self._plant.x_slices:
+            from difflib import get_close_matches
+
+            raise ConfigError(f"{self.name}: no state of {instance!r}; instances with a state: "
+                              + ", ".join(get_close_matches(instance, self._plant.x_slices, n=3)
+                                          or sorted(self._plant.x_slices)))
+        a, b = self._plant.x_slices[instance]
+        return self._x[a:b].copy()
+
+    def set_state(self, instance: str, values) -> None:
+        """Overwrite one instance's state (e.g. storage layers from measured sensors) and refresh
+        every signal with a zero-length step."""
+        a, b = self._plant.x_slices[instance] if instance in self._plant.x_slices else (None, None)
+        if a is None:
+            self.state(instance)  # ConfigError naming the instances with a state
+        values = np.asarray(values, dtype=np.float64)
+        if values.shape != (b - a,) or not np.all(np.isfinite(values)):
+            raise ValueError(f"set_state {instance}: {b - a} finite values expected, got shape {values.shape}")
+        self._x[a:b] = values
+        self._advance(0.0, 1)
+
     # --- signals ---------------------------------------------------------------------------
     def get(self, name: str) -> float:
-        return float(self._s[CATALOGUE.index(name)])
+        return float(self._s[self.catalogue.index(name)])
 
     def values(self) -> np.ndarray:
         """All signal values in catalogue order (a copy)."""
         return self._s.copy()
 
     def set(self, name: str, value: float) -> None:
-        sig = CATALOGUE.signal(name)
-        self._s[sig.index] = sig.input_value(value, _INPUT_NAMES)
+        sig = self.catalogue.signal(name)
+        self._s[sig.index] = sig.input_value(value, self._inputs)
         self._remote[sig.index] = True
 
     def release(self, name: str) -> None:
-        sig = CATALOGUE.signal(name)
+        sig = self.catalogue.signal(name)
         sig.require_input()
         self._remote[sig.index] = False
 
     def is_remote(self, name: str) -> bool:
-        return bool(self._remote[CATALOGUE.index(name)])
+        return bool(self._remote[self.catalogue.index(name)])
 
     # --- time ------------------------------------------------------------------------------
+    def _args(self):
+        P = self._plant
+        return (self._x, P.p, self._s, self._remote, self._ledger, P.tabs, P.prof, self._ia, self._fa)
+
     def _advance(self, dt: float, n: int, out=None, rec_every: int = 0) -> int:
         h = dt / n
-        out = out if out is not None else np.zeros((0, len(CATALOGUE) + 1))
-        if self._fmu is not None:
-            rows = self._fmu.advance(self, n, h, out, rec_every)
-            self.t += dt
-            return rows
-        rows = solver.run(n, h, self.t, self._x, self._p, self._tabs, self._prof, self._ports,
-                          self._s, self._remote, self._ledger, out, rec_every)
+        out = out if out is not None else np.zeros((0, len(self.catalogue) + 1))
+        x, p, s, remote, ledger, tabs, prof, ia, fa = self._args()
+        rows = self._plant.module.run(n, h, self.t, x, p, s, remote, ledger, tabs, prof, ia, fa, out, rec_every)
         self.t += dt
         return rows
+
+    def advance(self, t: float) -> None:
+        """Advance to time t [s since start] (the Plant protocol's clock-driven form of step)."""
+        if t > self.t:
+            self.step(t - self.t)
 
     def drive(self, times: np.ndarray, names: list[str], cmd: np.ndarray) -> np.ndarray:
         """Replay a command table from t = 0: the inputs `names` hold cmd[i] from times[i] to
@@ -223,33 +218,24 @@ class House:
         [len(times), signals]. Spans are cut at whole minutes and split into steps of at most
         5 s. The inputs are set remote (the house's own controller no longer writes them)."""
         for n in names:
-            CATALOGUE.signal(n).require_input()
-        idx = np.array([CATALOGUE.index(n) for n in names], dtype=np.int64)
+            self.catalogue.signal(n).require_input()
+        idx = np.array([self.catalogue.index(n) for n in names], dtype=np.int64)
         times = np.ascontiguousarray(times, dtype=np.float64)
         cmd = np.ascontiguousarray(cmd, dtype=np.float64).reshape(len(times), len(idx))
         if self.t != 0.0 or not np.all(np.diff(times) > 0) or times[0] < 0:
             raise ValueError("drive: starts at t = 0 with increasing sample times >= 0")
         self._remote[idx] = True
-        out = np.empty((len(times), len(CATALOGUE)))
-        if self._fmu is None:
-            solver.drive(times, cmd, idx, self._x, self._p, self._tabs, self._prof, self._ports,
-                         self._s, self._remote, self._ledger, out)
-            self.t = float(times[-1])
-            return out
-        # a storage FMU steps from Python: the same plan, one span at a time
-        for a, b, row, rec in solver.drive_plan(times, cmd):
-            self._s[idx] = cmd[int(row)]
-            if b > a:
-                self._advance(b - a, solver.n_steps(b - a))
-            if rec >= 0:
-                out[int(rec)] = self._s
+        out = np.empty((len(times), len(self.catalogue)))
+        x, p, s, remote, ledger, tabs, prof, ia, fa = self._args()
+        self._plant.module.drive(times, cmd, idx, x, p, s, remote, ledger, tabs, prof, ia, fa, out)
+        self.t = float(times[-1])
         return out
 
     def step(self, dt: float) -> None:
         """Advance by dt seconds (split into equal internal steps of at most 5 s)."""
         if not dt > 0 or not math.isfinite(dt):
             raise ValueError(f"step: dt = {dt}; must be a positive number of seconds")
-        self._advance(dt, solver.n_steps(dt))
+        self._advance(dt, n_steps(dt))
 
     def run(self, duration: float, dt: float = 1.0, out_interval: float = 60.0, progress=None):
         """Simulate `duration` seconds at step dt; returns (times [s], rows [n, signals]).
@@ -259,14 +245,14 @@ class House:
         """
         if not dt > 0:
             raise ValueError(f"run: dt = {dt}; must be positive")
-        sub = solver.n_steps(dt)
+        sub = n_steps(dt)
         h = dt / sub
         rec_every = max(1, int(round(out_interval / h)))
         if abs(rec_every * h - out_interval) > 1e-6 * out_interval:
             raise ValueError(f"run: out_interval = {out_interval} s must be a multiple of the step {dt} s")
         n_total = int(round(duration / h))
         chunk = max(rec_every, (int(86400 / h) // rec_every) * rec_every)
-        out = np.zeros((n_total // rec_every, len(CATALOGUE) + 1))
+        out = np.zeros((n_total // rec_every, len(self.catalogue) + 1))
         rows = 0
         done = 0
         while done < n_total:
@@ -280,92 +266,42 @@ class House:
     # --- energy ----------------------------------------------------------------------------
     def stored_energy(self) -> float:
         """Heat stored in all water volumes relative to 0 degC [J]."""
-        P = self._params
-        x = dict(zip(STATE_ORDER, self._x))
+        from .kinds import KINDS
+
         E = 0.0
-        for k in ("storage", "dhw_storage"):
-            E += CP * RHO * P[k].volume / P[k].n_layers * float(x[k].sum())
-        for k in ("supply_header", "return_header"):
-            E += CP * RHO * P[k].V * float(x[k][0])
-        E += CP * RHO * P["radiator"].V_water * float(x["radiator"][0])
-        E += CP * RHO * P["chp"].V_water * float(x["chp"][chp.STATES.index("T_w")])
+        for name, (a, b) in self._plant.x_slices.items():
+            if name not in self.decl.instances:
+                continue  # an instance's second state (filters, pressures): holds no water
+            inst = self.decl.instances[name]
+            E += KINDS[inst.kind].stored_energy(inst, self._x[a:b])
         return E
 
     def ledger(self) -> dict[str, float]:
-        """Energy ledger since reset [J], with the closure of the water-side balance."""
-        L = dict(zip(solver.LEDGER_NAMES, map(float, self._ledger)))
-        heat_in = L["heat_chp"] + L["heat_boiler"]
-        losses = L["loss_storage"] + L["loss_dhw_storage"] + L["loss_pipes"]
+        """Energy ledger since reset [J], per instance (fuel_chp, loss_storage ...) and summed,
+        with the closure of the water-side balance."""
+        L = {key: float(v) for (key, _, _), v in zip(self._plant.ledger, self._ledger)}
+        total = {cat: 0.0 for cat in compiler.LEDGER_CATEGORIES}
+        for (key, _, cat), v in zip(self._plant.ledger, self._ledger):
+            total[cat] += float(v)
+        heat_in = total["heat"]
+        losses = total["loss"]
         dE = self.stored_energy() - self._E0
-        fuel = L["fuel_chp"] + L["fuel_boiler"]
-        L["fuel"] = fuel
-        L["el_net"] = L["el_chp"] + L["el_boiler"]
-        L["generator_losses"] = fuel - L["el_net"] - heat_in
+        L["fuel"] = total["fuel"]
+        L["el_net"] = total["el"]
+        L["heat_generators"] = heat_in
+        L["heat_building"] = total["building"]
+        L["heat_dhw"] = total["dhw"]
+        L["dhw_missing"] = total["missing"]
+        L["generator_losses"] = total["fuel"] - total["el"] - heat_in
         L["losses"] = losses
         L["delta_stored"] = dE
-        L["residual"] = heat_in - (L["heat_building"] + L["heat_dhw"] + losses + dE)
-        L["closure"] = abs(L["residual"]) / fuel if fuel > 0 else abs(L["residual"])
+        L["residual"] = heat_in - (total["building"] + total["dhw"] + losses + dE)
+        L["closure"] = abs(L["residual"]) / L["fuel"] if L["fuel"] > 0 else abs(L["residual"])
         return L
 
 
-class FmuStorage:
-    """The heating storage as a co-simulation FMU, stepped between solver.before_storage and
-    solver.after_storage (see the module docstring)."""
-
-    def __init__(self, spec: housefile.StorageFmuSpec, n_layers: int):
-        self.spec = spec
-        self.n = n_layers
-        self._comp = None
-
-    def reset(self, T_st: np.ndarray) -> None:
-        """(Re)instantiate the FMU at time 0 and take its initial layer temperatures as the state."""
-        from .fmu.component import FmuComponent
-
-        self.close()
-        b = self.spec.bindings
-        roles = housefile.STORAGE_ROLES
-        inputs = {r: (b[r][0], roles[r][1], b[r][1]) for r in ("m_flow", "T_in_top", "T_in_bottom")}
-        var, unit = b["T_layer"]
-        outputs = {f"T_layer_{i}": (var.replace("{i}", str(i)), "degC", unit) for i in range(1, self.n + 1)}
-        outputs["T_out"] = (b["T_out"][0], "degC", b["T_out"][1])
-        outputs["Q_loss"] = (b["Q_loss"][0], "W", b["Q_loss"][1])
-        self._extra = []  # (signal index, output position) of optional roles
-        for role, signal in (("T_top", "storage.T_top"), ("T_bottom", "storage.T_bot"),
-                             *((f"T_sensor_{i}", f"storage.T_sensor_{i}") for i in range(1, 11))):
-            if role in b:
-                self._extra.append((CATALOGUE.index(signal), len(outputs)))
-                outputs[role] = (b[role][0], "degC", b[role][1])
-        self._comp = FmuComponent(self.spec.path, inputs=inputs, outputs=outputs,
-                                  parameters=self.spec.parameters, start_time=0.0)
-        y = self._comp.read_outputs()
-        T_st[:] = y[:self.n]
-        self._y = y
-
-    def advance(self, house: "House", n: int, h: float, out: np.ndarray, rec_every: int) -> int:
-        x, p, ports, s = house._x, house._p, house._ports, house._s
-        T_st = x[STATE_ORDER.index("storage")]
-        out_T = ports[1][3]
-        comp, N = self._comp, self.n
-        rows = 0
-        for k in range(n):
-            t = house.t + k * h
-            mid = solver.before_storage(t, h, x, p, house._tabs, house._prof, ports, s, house._remote)
-            comp.set_inputs((mid[solver.M_M_CHARGE] - mid[solver.M_M_DISCHARGE], mid[solver.M_T_SH],
-                             mid[solver.M_T_RH]))
-            y = comp.step(h) if h > 0.0 else self._y
-            self._y = y
-            T_st[:] = y[:N]
-            out_T[0] = y[N]
-            solver.after_storage(t, h, x, p, ports, s, house._ledger, mid, float(y[N + 1]))
-            for i_sig, i_out in self._extra:
-                s[i_sig] = y[i_out]
-            if rec_every > 0 and (k + 1) % rec_every == 0 and rows < out.shape[0]:
-                out[rows, 0] = t + h
-                out[rows, 1:] = s
-                rows += 1
-        return rows
-
-    def close(self) -> None:
-        if self._comp is not None:
-            self._comp.close()
-            self._comp = None
+def _output_signals(inst) -> list[str]:
+    out = []
+    for link in (inst.options.get("outputs") or {}).values():
+        out.append(link.get("signal") if isinstance(link, dict) else link)
+    return [n for n in out if isinstance(n, str)]

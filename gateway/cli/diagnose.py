@@ -36,12 +36,12 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from plant import housefile
+    from plant.house import load_spec
     from plant.diagnose import diagnose, recording_io, replay
     from plant.errors import ConfigError
 
     if args.requirements:
-        housefile.load(args.requirements)
+        load_spec(args.requirements)
         for k, v in replay.requirements().items():
             print(f"{k}:")
             items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
@@ -56,7 +56,7 @@ def run(args) -> int:
             raise ConfigError(f"--effects {f}: no such Python file")
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
-    spec = housefile.load(args.house)
+    spec = load_spec(args.house)
     rec = recording_io.load(args.recording, args.map, start=args.start, house_start=spec.start)
     for w in rec.warnings:
         print(f"warning: {w}", file=sys.stderr)

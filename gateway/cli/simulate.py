@@ -42,11 +42,16 @@ def register(sub) -> None:
 
 
 def signals(args) -> int:
-    from plant import housefile
-    from plant.catalogue import CATALOGUE
+    from plant.house import load_house, load_spec
 
-    housefile.load(args.house)  # validates the house exists and is well-formed
-    rows = [s for s in CATALOGUE if not args.inputs or s.causality == "input"]
+    spec = load_spec(args.house)  # every problem of the file, before anything is built
+    if hasattr(spec, "instances"):
+        from plant.compiler import catalogue_of
+
+        catalogue = catalogue_of(args.house)
+    else:
+        catalogue = load_house(args.house).catalogue
+    rows = [s for s in catalogue if not args.inputs or s.causality == "input"]
     width = max(len(s.name) for s in rows)
     for s in rows:
         print(f"{s.name:<{width}}  {s.unit:<6} {s.causality:<7} {s.description}")

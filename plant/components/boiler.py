@@ -45,9 +45,9 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import Kind as ComponentKind, pack, param
 from ..tables import interp1, interp2, read_tables
-from ..water import CP
+from ..water import CP, RHO
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "boiler_wolf_cgb"
 
@@ -166,3 +166,41 @@ def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext,
     x[X_EEL] += P_el * dt
     x[X_EHEAT] += P_heat * dt
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
+
+
+class Kind(ComponentKind):
+    """The Wolf CGB as a generator on a coupling point (input: the 0-10 V demand U_set)."""
+
+    name = "boiler"
+    Params = Params
+    role = "generator"
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit_generator(self, c, inst, T_in, m_ext):
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))
+        tabs = ", ".join(c.table(a) for a in tables())
+        U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
+        mod = c.module(__name__)
+        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Pf}, {Ph}, {mode} = {mod}.step(t, h, {x}, {p}, {tabs}, "
+               f"{U}, {m_ext}, {T_in})")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_sup', 'degC', 'boiler supply temperature')} = {T} if {m} > 0.0 else {T_in}",
+               f"{sig('T_ret', 'degC', 'boiler return temperature')} = {T_in}",
+               f"{sig('m_flow', 'kg/s', 'water flow through the boiler')} = {m}",
+               f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
+               f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
+               f"{sig('P_el', 'W', 'electric power (- consumed)')} = {Pel}",
+               f"{sig('y', '1', 'effective modulation')} = {x}[{X_Y}]",
+               f"{sig('mode', '1', '0 idle, 1 start-up, 3 steady, 4 run-on, 5 locked out, 6 anti-cycle wait, 8 fault')} = {mode}",
+               f"{sig('starts', '1', 'number of burner starts')} = {x}[{X_STARTS}]",
+               f"{sig('run_hours', 'h', 'burner operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
+               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
+               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X_EFUEL}]",
+               f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
+               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
+               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
+        return m, T

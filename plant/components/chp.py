@@ -65,7 +65,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import Kind as ComponentKind, pack, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
 
@@ -249,3 +249,67 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
     x[X_EEL] += P_el * dt
     x[X_EHEAT] += P_heat * dt
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
+
+
+class Kind(ComponentKind):
+    """The neoTower 2 as a generator on a coupling point (inputs on, y_set)."""
+
+    name = "chp"
+    Params = Params
+    role = "generator"
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def stored_energy(self, inst, x):
+        return CP * RHO * inst.params.V_water * float(x[X_TW])
+
+    def _views(self, c, inst):
+        if inst.name not in c.x_slices:
+            c.state(inst, self.initial_state(inst))
+            c.param(inst, pack(inst.params))
+        return f"x_{inst.name}", f"p_{inst.name}"
+
+    def emit_pump_request(self, c, inst, T_in):
+        """The flow the internal pump asks for this step with no flow forced through the unit
+        (a scratch step of a copy of the state): what the unit's own heat counter sees."""
+        x, p = self._views(c, inst)
+        scratch, m = c.float_array(len(STATES)), c.var("m_pump")
+        tabs = ", ".join(c.table(a) for a in tables())
+        mod = c.module(__name__)
+        c.emit("hydraulics", f"{scratch}[:] = {x}",
+               f"{m} = {mod}.step(t, h, {scratch}, {p}, {tabs}, {c.s(inst.name + '.on')}, "
+               f"{c.s(inst.name + '.y_set')}, 0.0, {T_in})[0]")
+        return m
+
+    def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
+        x, p = self._views(c, inst)
+        m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))
+        tabs = ", ".join(c.table(a) for a in tables())
+        on = c.signal(inst, "on", "1", "input", "CHP run command (0/1)")
+        y_set = c.signal(inst, "y_set", "1", "input", "CHP electric modulation request 0.55..1 (lower runs at 0.55)")
+        mod = c.module(__name__)
+        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Pf}, {Ph}, {mode} = {mod}.step(t, h, {x}, {p}, {tabs}, "
+               f"{on}, {y_set}, {m_ext}, {T_in})")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        T_sup = sig("T_sup", "degC", "CHP supply (outlet) temperature")
+        c.emit("signals",
+               f"{T_sup} = {T} if {m} > 0.0 else {x}[{X_TW}]",
+               f"{sig('T_ret', 'degC', 'CHP return (inlet) temperature')} = {T_in}",
+               f"{sig('m_flow', 'kg/s', 'water flow through the CHP')} = {m}",
+               f"{sig('P_el', 'W', 'electric power, + produced, - consumed')} = {Pel}",
+               f"{sig('Q_flow', 'W', 'heat delivered to the circuit m cp (T_sup - T_ret)')} = {m} * CP * ({T} - {T_in})",
+               f"{sig('m_flow_pump', 'kg/s', 'flow of the CHP internal pump (chp.m_flow is larger when the header forces flow through the unit)')} = {m_pump or x + '[' + str(X_MPUMP) + ']'}",
+               f"{sig('Q_flow_meter', 'W', 'the CHP own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it')} = {m_pump or x + '[' + str(X_MPUMP) + ']'} * CP * ({T_sup} - {T_in})",
+               f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
+               f"{sig('y', '1', 'effective electric modulation')} = {x}[{X_Y}]",
+               f"{sig('mode', '1', '0 idle, 1 start-up, 2 warm-up, 3 steady, 4 cool-down, 5 locked out, 8 fault')} = {mode}",
+               f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
+               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
+               f"{sig('E_el', 'J', 'electric energy produced (net)')} = {x}[{X_EEL}]",
+               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
+               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X_EFUEL}]",
+               f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
+               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
+               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
+        return m, T

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 from ..water import CP
 
 STATES = ()
@@ -38,3 +38,40 @@ def draw(p, m_demand, T_hot):
         m_hot = m_demand * (T_set - T_cold) / (T_hot - T_cold)
         return m_hot, T_set, 0.0
     return m_demand, T_hot, m_demand * CP * (T_set - max(T_hot, T_cold))
+
+
+class Kind(ComponentKind):
+    """The hot-water draw (profile) through a storage: hot water leaves at the `hot` height, cold
+    water enters at the `cold` height [m above the storage bottom]."""
+
+    name = "dhw_draw"
+    Params = Params
+    role = "draw"
+    REFS = {"storage": "storage"}
+    LINKS = {"storage": (REQUIRED, "the storage the hot water is drawn from"),
+             "hot": (REQUIRED, "height of the hot-water outlet [m]"),
+             "cold": (REQUIRED, "height of the cold-water inlet [m]")}
+
+    def emit(self, c, inst):
+        p = c.param(inst, pack(inst.params))
+        st = inst.options["storage"]
+        ports = c.storage_ports(st)
+        i_in = ports.add_inlet(inst, "cold", c.port_layer(inst, "cold", st))
+        i_out = ports.add_outlet(inst, "hot", c.port_layer(inst, "hot", st))
+        m_hot, T_tap, Q_miss, Q_dhw = (c.var(v) for v in ("m_hot", "T_tap", "Q_miss", "Q_dhw"))
+        mod = c.module(__name__)
+        c.emit("draws",
+               f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, x_{st}[{st}_out_layer[{i_out}]])",
+               f"{st}_in_m[{i_in}] = {m_hot}",
+               f"{st}_in_T[{i_in}] = {p}[{T_COLD}]",
+               f"{st}_out_m[{i_out}] = {m_hot}")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{T_COLD}])",
+               f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
+               f"{sig('m_flow_hot', 'kg/s', 'hot water taken from the storage')} = {m_hot}",
+               f"{sig('T_tap', 'degC', 'temperature delivered at the tap')} = {T_tap}",
+               f"{sig('Q_flow', 'W', 'heat delivered to the tap water')} = {Q_dhw}",
+               f"{sig('Q_flow_missing', 'W', 'heat missing to reach the tap set temperature')} = {Q_miss}",
+               f"{c.ledger_entry(inst, 'dhw')} += {Q_dhw} * h",
+               f"{c.ledger_entry(inst, 'missing')} += {Q_miss} * h")

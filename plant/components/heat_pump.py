@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 from ..tables import interp2, read_tables
 from ..water import CP
 
@@ -221,3 +221,46 @@ def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
             P_heat = Q_hp + P_aux
             P_el = -(P_hp + P_aux)
     return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
+
+
+class AirKind(ComponentKind):
+    """The CHA-10 as a generator on a coupling point (inputs on, y_set, aux; the outdoor air from
+    the weather profile)."""
+
+    name = "heat_pump_air"
+    Params = ParamsAir
+    role = "generator"
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        m, T, Pel, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_heat", "mode"))
+        tabs = ", ".join(c.table(a) for a in tables_air())
+        on = c.signal(inst, "on", "1", "input", "heat pump run command (0/1)")
+        y_set = c.signal(inst, "y_set", "1", "input", "compressor modulation request 0.2..1")
+        aux = c.signal(inst, "aux", "1", "input", "back-up heater request: 0, <= 1/3 (2 kW), <= 2/3 (4 kW), > 2/3 (6 kW)")
+        mod = c.module(__name__)
+        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_air(t, h, {x}, {p}, {tabs}, "
+                             f"{on}, {y_set}, {aux}, {c.values['weather.T_air']}, {m_ext}, {T_in})")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_sup', 'degC', 'heat pump supply temperature')} = {T} if {m} > 0.0 else {T_in}",
+               f"{sig('T_ret', 'degC', 'heat pump return temperature')} = {T_in}",
+               f"{sig('m_flow', 'kg/s', 'water flow through the heat pump')} = {m}",
+               f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
+               f"{sig('P_el', 'W', 'electric power (- consumed: compressor and back-up heater)')} = {Pel}",
+               f"{sig('COP', '1', 'heat over electric power while heating (0 otherwise)')} = "
+               f"{Ph} / -{Pel} if {mode} == 3.0 and {Pel} < 0.0 else 0.0",
+               f"{sig('y', '1', 'effective modulation')} = {x}[{X_Y}]",
+               f"{sig('mode', '1', '0 off, 1 start delay, 3 heating, 5 blocked, 7 defrost')} = {mode}",
+               f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
+               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
+               f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X_EEL}]",
+               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
+               # energy in: the ambient heat the compressor lifts (heat + electric power, heating only)
+               f"{c.ledger_entry(inst, 'fuel')} += ({Ph} + {Pel}) * h if {mode} == 3.0 else 0.0",
+               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
+               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
+        return m, T

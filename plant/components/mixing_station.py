@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 
 STATES = ("y", "y_integral")
 
@@ -63,3 +63,39 @@ def step(dt, x, p, T_set, m_flow_set, T_primary, T_ret):
         lim = dt / p[T_STROKE]
         x[0] = x[0] + min(max(dy, -lim), lim)
     return m, y * m, T_sup, y
+
+
+class Kind(ComponentKind):
+    """The mixing station as a consumer of a coupling point: it draws primary water at the
+    coupling point's supply temperature and feeds its emitter (link `emitter`)."""
+
+    name = "mixing_station"
+    Params = Params
+    role = "consumer"
+    REFS = {"emitter": "emitter"}
+    LINKS = {"emitter": (REQUIRED, "the emitter the station feeds (a radiator or floor heating)")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit_consumer(self, c, inst, T_sup):
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        emitter = c.instances[inst.options["emitter"]]
+        m, m_prim, T_mix, y = (c.var(v) for v in ("m_mix", "m_prim", "T_mix", "y_valve"))
+        T_set = c.signal(inst, "T_sup_set", "degC", "input", "heating-circuit supply temperature set-point")
+        m_set = c.signal(inst, "m_flow_set", "kg/s", "input", "heating-circuit flow set-point")
+        mod = c.module(__name__)
+        T_emitter_ret = c.kinds[emitter.kind].return_state(c, emitter)
+        c.emit("hydraulics", f"{m}, {m_prim}, {T_mix}, {y} = {mod}.step(h, {x}, {p}, {T_set}, {m_set}, "
+                             f"{T_sup}, {T_emitter_ret})")
+        T_ret = c.kinds[emitter.kind].emit_emitter(c, emitter, m, T_mix)
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_sup', 'degC', 'heating supply temperature after mixing (measured)')} = {T_mix}",
+               f"{sig('T_ret', 'degC', 'heating return temperature')} = {T_ret}",
+               f"{sig('m_flow', 'kg/s', 'heating-circuit flow (building side, measured)')} = {m}",
+               f"{sig('m_flow_primary', 'kg/s', 'flow drawn from the coupling point (before mixing)')} = {m_prim}",
+               f"{sig('y_valve', '1', 'mixing valve position (primary share)')} = {y}",
+               f"{sig('Q_flow', 'W', 'heat taken from the coupling point by the heating circuit')} = "
+               f"{m_prim} * CP * ({T_sup} - {T_ret})")
+        return m_prim, T_ret

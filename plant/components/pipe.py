@@ -3,7 +3,7 @@
 The headers give the coupling point its (small) water content, which also breaks the algebraic
 loop between generators and consumers: everything that leaves a header in a step leaves at the
 header's start-of-step temperature, so the energy ledger closes exactly. Explicit update, stable
-while dt x (inflow) < volume mass; the house splits longer steps (see plant/solver.py).
+while dt x (inflow) < volume mass; the house splits longer steps (plant/schedule.py).
 """
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 from ..water import CP, RHO
 
 STATES = ("T",)
@@ -43,3 +43,24 @@ def step(dt, x, p, H_in, m_in):
     Q_loss = p[UA_LOSS] * (T - p[T_ENV])
     x[0] = T + dt * (H_in - m_in * CP * T - Q_loss) / (CP * RHO * p[V])
     return Q_loss
+
+
+class Kind(ComponentKind):
+    """A mixed volume (a header and its connecting pipes); stepped by the coupling point that
+    uses it as its supply or return."""
+
+    name = "header"
+    Params = Params
+    role = "volume"
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def stored_energy(self, inst, x):
+        return CP * RHO * inst.params.V * float(x[0])
+
+    def views(self, c, inst):
+        if inst.name not in c.x_slices:
+            c.state(inst, self.initial_state(inst))
+            c.param(inst, pack(inst.params))
+        return f"x_{inst.name}", f"p_{inst.name}"

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 from ..water import CP, RHO
 
 STATES = ("T_ret",)
@@ -71,3 +71,38 @@ def step(dt, x, p, m_flow, T_sup, T_room):
     C = CP * RHO * p[V_WATER]
     x[0] = T_ret + dt * (m_flow * CP * (T_sup - T_ret) - Q) / C
     return T_ret, Q
+
+
+class Kind(ComponentKind):
+    """Radiators as the emitter of a mixing station, giving their heat to a zone (link `zone`)."""
+
+    name = "radiator"
+    Params = Params
+    role = "emitter"
+    REFS = {"zone": "zone"}
+    LINKS = {"zone": (REQUIRED, "the zone the radiators heat")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def stored_energy(self, inst, x):
+        return CP * RHO * inst.params.V_water * float(x[0])
+
+    def return_state(self, c, inst):
+        """The start-of-step return temperature (the water in the radiators)."""
+        if inst.name not in c.x_slices:
+            c.state(inst, self.initial_state(inst))
+            c.param(inst, pack(inst.params))
+        return f"x_{inst.name}[0]"
+
+    def emit_emitter(self, c, inst, m_flow, T_sup):
+        self.return_state(c, inst)
+        zone = c.instances[inst.options["zone"]]
+        T_ret, Q = c.var("T_rad_ret"), c.var("Q_rad")
+        mod = c.module(__name__)
+        c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, x_{inst.name}, p_{inst.name}, {m_flow}, {T_sup}, "
+                             f"x_{zone.name}[0])")
+        c.heat_to.setdefault(zone.name, []).append(Q)
+        c.emit("signals", f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat emitted by the radiators into the zone')} = {Q}",
+               f"{c.ledger_entry(inst, 'building')} += {Q} * h")
+        return T_ret

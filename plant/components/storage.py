@@ -146,6 +146,8 @@ class Params:
     limiter: int = param(LIMITER_SUPERBEE, "1", "advection: 0 upwind, 1 van Leer, 2 MC, 3 superbee", 0, 3)
     T_init_top: float = param(80.0, "degC", "initial temperature of the top layer", 0.0, 100.0)
     T_init_bottom: float = param(40.0, "degC", "initial temperature of the bottom layer", 0.0, 100.0)
+    soc_T0: float = param(40.0, "degC", "mean temperature of SOC 0 and of zero stored heat (E_stored)", 0.0, 100.0)
+    soc_Tmax: float = param(80.0, "degC", "mean temperature of SOC 1", 1.0, 120.0)
 
 
 I_VOLUME = 0
@@ -157,6 +159,8 @@ I_UA_LAYER = 5
 I_LIMITER = 6
 I_T_INIT_TOP = 7
 I_T_INIT_BOTTOM = 8
+I_SOC_T0 = 9
+I_SOC_TMAX = 10
 
 assert index_of(Params)["T_init_bottom"] == I_T_INIT_BOTTOM
 
@@ -437,5 +441,5 @@ __all__ = [
     "Params", "initial_state", "state_names", "layer_conductance", "step", "n_substeps", "soc",
     "stored_energy", "sensor_temperatures", "sensor_temperatures_into", "port_layer",
     "SOC_BUFFER", "SOC_DHW", "I_VOLUME", "I_HEIGHT", "I_N_LAYERS", "I_UA_LOSS", "I_T_ENV",
-    "I_UA_LAYER", "I_LIMITER", "I_T_INIT_TOP", "I_T_INIT_BOTTOM",
+    "I_UA_LAYER", "I_LIMITER", "I_T_INIT_TOP", "I_T_INIT_BOTTOM", "I_SOC_T0", "I_SOC_TMAX",
 ]

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 
 STATES = ("T_room", "T_mass")
 
@@ -89,3 +89,37 @@ def step(dt, x, p, T_out, E_dir, E_dif, presence, P_el_household, Q_heating):
     x[0] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[H_DIRECT] * (T_r - T_out)) / p[C_ROOM]
     x[1] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[H_ENVELOPE] * (T_m - T_out)) / p[C_MASS]
     return Q_int, Q_sol, Q_loss
+
+
+class Kind(ComponentKind):
+    """The living zone: weather and gains from the profiles, heat from its emitters."""
+
+    name = "zone"
+    Params = Params
+    role = "zone"
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def state_view(self, c, inst):
+        if inst.name not in c.x_slices:
+            c.state(inst, self.initial_state(inst))
+            c.param(inst, pack(inst.params))
+        return f"x_{inst.name}", f"p_{inst.name}"
+
+    def emit(self, c, inst):
+        x, p = self.state_view(c, inst)
+        mod = c.module(__name__)
+        T_set, Q_int, Q_sol, Q_loss = (c.var(v) for v in ("T_set_room", "Q_int", "Q_sol", "Q_zloss"))
+        c.values[f"{inst.name}.T_set"] = T_set
+        c.emit("setpoints", f"{T_set} = {mod}.setpoint({p}, tau)")
+        heat = c.heat_to.get(inst.name) or ["0.0"]
+        c.emit("rooms", f"{Q_int}, {Q_sol}, {Q_loss} = {mod}.step(h, {x}, {p}, T_air, E_dir, E_dif, presence, "
+                        f"P_hh, {' + '.join(heat)})")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_room', 'degC', 'living-zone temperature')} = {x}[0]",
+               f"{sig('T_set', 'degC', 'room set-point (with night reduction)')} = {T_set}",
+               f"{sig('T_mass', 'degC', 'envelope mass temperature')} = {x}[1]",
+               f"{sig('Q_flow_gains', 'W', 'internal gains (people and household electricity)')} = {Q_int}",
+               f"{sig('Q_flow_solar', 'W', 'solar gains')} = {Q_sol}")

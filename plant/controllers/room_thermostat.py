@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 
 STATES = ("integral",)
 
@@ -52,3 +52,31 @@ def step(dt, x, p, T_room, T_room_set, T_out):
         x[0] += dt * p[K_P] * e / p[T_I]  # conditional integration: no wind-up at the limits
     u = min(max(u, 0.0), 1.0)
     return T_sup, u * p[M_FLOW_MAX]
+
+
+class Kind(ComponentKind):
+    """Room thermostat: room temperature, its set-point and the outdoor air in; the heating
+    circuit's supply set-point and flow out."""
+
+    name = "room_thermostat"
+    Params = Params
+    role = "controller"
+    INPUTS = ("T_room", "T_room_set", "T_out")
+    OUTPUTS = ("T_sup_set", "m_flow_set")
+    LINKS = {"inputs": (REQUIRED, "T_room, T_room_set, T_out = signal names"),
+             "outputs": (REQUIRED, "T_sup_set, m_flow_set = input signal names")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit(self, c, inst):
+        from . import check_keys, read, write
+
+        check_keys(c, inst, self.INPUTS, self.OUTPUTS)
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        T_sup, m = c.var("T_sup_req"), c.var("m_req")
+        mod = c.module(__name__)
+        c.emit("control", f"{T_sup}, {m} = {mod}.step(h, {x}, {p}, "
+                          f"{', '.join(read(c, inst, k) for k in self.INPUTS)})")
+        write(c, inst, "T_sup_set", T_sup)
+        write(c, inst, "m_flow_set", m)

@@ -4,8 +4,9 @@ Published rule set: CHP on when the heating-storage top < 65 degC, boiler on whe
 < 60 degC, both off when the storage bottom > 70 degC; DHW charging on when the DHW top < 50 degC
 and it is below the heating-storage top, off when the DHW top > 65 degC (and also when the
 heating-storage top has fallen below the DHW top, so charging never cools the DHW tank).
-"Top" and "bottom" are configurable sensor positions (1 = bottom ... 10 = top, as the lab's
-TS_S_TM_BT_1..10); defaults are the literal reading, sensors 10 and 1. Each actuator keeps its
+"Top" and "bottom" are whichever signals the house file links as inputs T_top, T_bottom and
+T_dhw_top (house 1: storage sensors 10 and 1 of TS_S_TM_BT_1..10, DHW sensor 10); its outputs are
+linked to the inputs they drive (chp_on, chp_y, boiler_U, dhw_on). Each actuator keeps its
 state between its on and off conditions. Outputs: CHP on + modulation 1, boiler 10 V demand,
 DHW charging pump on. An actuator driven from outside (gateway) is not written by this controller.
 """
@@ -16,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import param
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
 
 STATES = ("chp_on", "boiler_on", "dhw_on", "since_scan")
 
@@ -28,9 +29,6 @@ class Params:
     off_above: float = param(70.0, "degC", "CHP and boiler stop when the storage bottom is above", 20, 95)
     dhw_on_below: float = param(50.0, "degC", "DHW charging starts when the DHW top is below", 20, 95)
     dhw_off_above: float = param(65.0, "degC", "DHW charging stops when the DHW top is above", 20, 95)
-    top_sensor: int = param(10, "1", "storage sensor used as 'top' (1 = bottom ... 10 = top)", 1, 10)
-    bottom_sensor: int = param(1, "1", "storage sensor used as 'bottom'", 1, 10)
-    dhw_top_sensor: int = param(10, "1", "DHW storage sensor used as 'top'", 1, 10)
     chp_modulation: float = param(1.0, "1", "CHP modulation when on", 0.55, 1.0)
     boiler_demand: float = param(10.0, "V", "boiler 0-10 V demand when on", 2.1, 10.0)
     period: float = param(1.0, "s", "scan period: the rules are evaluated this often (a PLC's cycle)", 0.0, 3600.0)
@@ -38,8 +36,8 @@ class Params:
                                      "the 0.1 degC registers of the device maps)", 0.0, 5.0)
 
 
-(CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, TOP_SENSOR, BOTTOM_SENSOR,
- DHW_TOP_SENSOR, CHP_MODULATION, BOILER_DEMAND, PERIOD, SENSOR_RESOLUTION) = range(12)
+(CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, CHP_MODULATION, BOILER_DEMAND,
+ PERIOD, SENSOR_RESOLUTION) = range(9)
 
 
 @njit(cache=True)
@@ -79,3 +77,31 @@ def step(dt, x, p, T_top, T_bottom, T_dhw_top):
     elif T_dhw_top < p[DHW_ON_BELOW] and T_dhw_top < T_top:
         x[2] = 1.0
     return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]
+
+
+class Kind(ComponentKind):
+    """The case-study rules: storage temperatures in (signal links), generator and DHW pump
+    commands out."""
+
+    name = "rule_based"
+    Params = Params
+    role = "controller"
+    INPUTS = ("T_top", "T_bottom", "T_dhw_top")
+    OUTPUTS = ("chp_on", "chp_y", "boiler_U", "dhw_on")
+    LINKS = {"inputs": (REQUIRED, "measurements: T_top, T_bottom, T_dhw_top = signal names"),
+             "outputs": (REQUIRED, "commands: chp_on, chp_y, boiler_U, dhw_on = input signal names")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit(self, c, inst):
+        from . import check_keys, read, write
+
+        check_keys(c, inst, self.INPUTS, self.OUTPUTS)
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        outs = [c.var(v) for v in self.OUTPUTS]
+        mod = c.module(__name__)
+        c.emit("control", f"{', '.join(outs)} = {mod}.step(h, {x}, {p}, "
+                          f"{', '.join(read(c, inst, k) for k in self.INPUTS)})")
+        for key, v in zip(self.OUTPUTS, outs):
+            write(c, inst, key, v)

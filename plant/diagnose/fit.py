@@ -66,13 +66,13 @@ JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate
 
 def nominal_params(house: str, refit=NOMINAL_REFIT) -> list:
     """Param objects (name = override key, bounds = file value -+ rel) of the re-fitted nominals."""
-    from ..housefile import load
+    from ..declaration import load
 
     spec = load(house)
     out = []
     for q in refit:
         section, _, key = q.key.partition(".")
-        v = float(getattr(spec.params[section], key))
+        v = float(getattr(spec.instances[section].params, key))
         out.append(Param(q.key, v * (1.0 - q.rel), v * (1.0 + q.rel), v, q.unit))
     return out
 

@@ -97,7 +97,7 @@ class Replayer:
         self.base: dict = {}
 
     def _init_storage(self, house) -> None:
-        for comp, k in (("storage", 2), ("dhw_storage", 3)):
+        for comp in ("storage", "dhw_storage"):
             names = [f"{comp}.T_sensor_{i}" for i in range(1, 11)]
             if not all(self.rec.has(n) for n in names):
                 continue
@@ -107,15 +107,13 @@ class Replayer:
             sim = np.array([house.get(n) for n in names])
             if np.max(np.abs(meas - sim)) < 0.5:
                 continue
-            T = house._x[k]
-            n = T.shape[0]
+            n = house.state(comp).shape[0]
             z_layer = 1.0 - (np.arange(n) + 0.5) / n  # layer 0 = top
             z_sens = (np.arange(10) + 0.5) / 10.0
-            T[:] = np.interp(z_layer, z_sens, meas)
+            house.set_state(comp, np.interp(z_layer, z_sens, meas))
             if not self._checked:
                 self.notes.append(f"{comp}: initial layer temperatures set from the first recorded sensor "
                                   f"values (twin default differed by up to {np.max(np.abs(meas - sim)):.1f} K)")
-        house._advance(0.0, 1)
 
     def run(self, overrides: dict | None = None, until: float | None = None) -> np.ndarray:
         """Rows [n_samples, n_signals] (catalogue order) at the recording's sample times."""
@@ -126,8 +124,8 @@ class Replayer:
                            overrides=ov or None)
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         if self.init_from_sensors:
-            house._remote[self.idx] = True
-            house._s[self.idx] = self.cmd[0]
+            for name, value in zip(COMMANDS, self.cmd[0]):
+                house.set(name, value)
             self._init_storage(house)
         out = house.drive(self.t[:n], COMMANDS, self.cmd[:n])
         self._checked = True

@@ -30,10 +30,10 @@ NOISE = {"degC": (0.05, 0.1), "kg/s": (0.001, 0.0), "W": (20.0, 0.0)}  # sigma, 
 # effect -> (kind, key or signal, default size)
 CASES = {
     "none": ("override", None, 0.0),
-    "idle_generator_flow": ("override", "connections.idle_flow_chp", 0.25),
-    "pump_coupling": ("override", "connections.pump_coupling_chp", 0.3),
+    "idle_generator_flow": ("override", "switch.idle_flow.chp", 0.25),
+    "pump_coupling": ("override", "switch.pump_coupling.chp", 0.3),
     "heat_loss": ("override", "storage.UA_loss", 80.0),
-    "storage_mixing": ("override", "connections.storage_inlet_mixing", 0.1),
+    "storage_mixing": ("override", "switch.storage_inlet_mixing", 0.1),
     "thermal_mass": ("override", "chp.V_water", 0.02),
     "sensor_lag": ("lag", "storage.T_sensor_10", 600.0),
     "sensor_offset": ("offset", "switch.T_ret", 1.5),

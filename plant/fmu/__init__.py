@@ -15,9 +15,9 @@
                 the FMU imports the installed twin, so it needs a Python with this package
 
 Where an FMU runs in a house:
-  - the heating storage: `[storage] fmu = "..."` with `[storage.bindings]` and
-    `[storage.parameters]` (plant/housefile.py); House steps solver.before_storage ->
-    FmuComponent.step -> solver.after_storage every internal step (plant/house.py, FmuStorage).
+  - a storage: `kind = "storage_fmu"`, `fmu = "..."` with `[<name>.bindings]` and
+    `[<name>.parameters]` (storage_kind.py); the compiled step calls its doStep in object mode
+    at the storage's place in the step, so clock, step order and ledger stay the house's.
   - the whole plant: `[house] topology = "fmu"`, `fmu = "..."`, `[bindings]` catalogue signal =
     FMU variable (or { var, unit }), optional `[parameters]`, `solver = "CVode" | "Euler"` for a
     model-exchange FMU, `max_step`; load_house returns an FmuHouse, stepped by the gateway's clock

@@ -149,18 +149,17 @@ class {class_name}(Fmi2Slave):
 
     # ---- the house
     def _build(self):
-        from plant import housefile
-        from plant.catalogue import CATALOGUE
-        from plant.house import House
+        from plant.house import load_house
 
-        installed = [(s.name, s.unit, s.causality) for s in CATALOGUE]
+        path = Path(self.resources) / HOUSE_FILE
+        controller = "rule_based" if self.use_builtin_controller else "external"
+        self._house = load_house(path, start=self.start_date, controller=controller)
+        catalogue = self._house.catalogue
+        installed = [(s.name, s.unit, s.causality) for s in catalogue]
         if installed != [tuple(s[:3]) for s in SIGNALS]:
             raise RuntimeError("the installed twin's signal catalogue differs from the one this FMU "
                                "was exported with; re-export it with `twin export-fmu`")
-        path = Path(self.resources) / HOUSE_FILE
-        controller = "rule_based" if self.use_builtin_controller else "external"
-        self._house = House(housefile.load(path), start=self.start_date, controller=controller)
-        self._out_index = [CATALOGUE.index(s[0]) for s in self._outputs]
+        self._out_index = [catalogue.index(s[0]) for s in self._outputs]
         self._refresh()
         return self._house
 
@@ -241,17 +240,17 @@ def model_identifier(house_name: str) -> str:
 
 def slave_source(spec, start: str, builtin_controller: bool, class_name: str,
                  house_file: str = "house.toml") -> str:
-    """The Python source of the Fmi2Slave subclass for a house spec (catalogue baked in)."""
-    from ..catalogue import CATALOGUE
+    """The Python source of the Fmi2Slave subclass for a house declaration (catalogue baked in)."""
     from ..house import House
 
+    # input start values: what the external-controller house holds before anything is set
+    ref = House(spec, start=start, controller="external")
+    CATALOGUE = ref.catalogue
     units = sorted({s.unit for s in CATALOGUE if s.causality in ("input", "output")})
     missing = [u for u in units if u not in UNIT_DEFINITIONS]
     if missing:
         raise FmuError(f"catalogue units without an FMI unit definition: {', '.join(missing)}; "
                        "add them to UNIT_DEFINITIONS in plant/fmu/export.py (and plant/units.py)")
-    # input start values: what the external-controller house holds before anything is set
-    ref = House(spec, start=start, controller="external")
     starts = {s.name: ref.get(s.name) for s in CATALOGUE.inputs()}
     signals = [(s.name, s.unit, s.causality, s.description) for s in CATALOGUE
                if s.causality in ("input", "output")]
@@ -276,16 +275,18 @@ def export_house_fmu(house: str | Path = "house1", out: str | Path | None = None
     """
     from profiles import loaders
 
-    from .. import housefile
+    from .. import declaration
 
-    spec = housefile.load(house)  # ConfigError naming the file / the shipped houses
-    if isinstance(spec, housefile.FmuHouseSpec):
-        raise ConfigError(f"{spec.path}: the plant of this house is already an FMU ({spec.fmu}); "
+    path = declaration.resolve(house)  # ConfigError naming the file / the shipped houses
+    doc = declaration.read(path)
+    if isinstance(doc.get("house"), dict) and doc["house"].get("topology") == "fmu":
+        raise ConfigError(f"{path}: the plant of this house is already an FMU ({doc['house'].get('fmu')}); "
                           "export-fmu exports native houses")
-    if spec.storage_fmu is not None:
-        raise ConfigError(f"{spec.path}: the heating storage of this house is an FMU ([storage] fmu); "
-                          "exporting such a house as an FMU is not supported - export a house with "
-                          "the native storage")
+    spec = declaration.load(path)
+    fmus = [i.name for i in spec.instances.values() if i.kind == "storage_fmu"]
+    if fmus:
+        raise ConfigError(f"{spec.path}: [{fmus[0]}] is an FMU (kind = \"storage_fmu\"); exporting such "
+                          "a house as an FMU is not supported - export a house with the native storage")
     start = str(start) if start is not None else spec.start
     loaders.start_offset(start)  # ConfigError: 'not a date; use YYYY-MM-DD ...'
     out = Path(out) if out is not None else Path(f"{spec.name}.fmu")

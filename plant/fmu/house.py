@@ -3,7 +3,7 @@
     house = load_house("my_house.toml")          # [house] topology = "fmu" -> FmuHouse
     house.set("boiler.U_set", 10.0); house.step(1.0); house.get("storage.T_sensor_1")
 
-The house file (syntax: plant.housefile._fmu_house) binds catalogue signals (plant/catalogue.py,
+The house file (syntax: plant/fmu/housefile.py) binds catalogue signals (plant/catalogue.py,
 so the device maps bind by name) to FMU variables, with units converted where they differ
 (plant.fmu.component.unit_conversion).  Catalogue inputs bind to FMU inputs, outputs to FMU
 outputs.  `catalogue` holds the bound signals only, in catalogue order; a signal the file does

@@ -1,5 +1,5 @@
-"""A higher-fidelity "truth" of house 1 (pressure-driven hydraulics, finer storage, sensor lag)
-and the generator of lab-like recordings with known, concealed effects (see recording.py)."""
-from .house import TruthHouse, load_truth
+"""A higher-fidelity "truth" of house 1 (pressure-driven hydraulics, finer storage, sensor lag) as
+a house-file variant, and the generator of lab-like recordings with known, concealed effects."""
+from .house import TRUTH, load_truth
 
-__all__ = ["TruthHouse", "load_truth"]
+__all__ = ["TRUTH", "load_truth"]

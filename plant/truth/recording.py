@@ -107,7 +107,7 @@ def build_house(case: str, start: str, magnitude: float | None):
     if case not in CASES:
         raise ConfigError(f"case {case!r}: unknown; known: {', '.join(CASES)}")
     mag = CASES[case][1] if magnitude is None else float(magnitude)
-    from . import hydraulic_network as net
+    from ..hydraulics import pressure_driven as net
     from .house import load_truth
 
     if case == "nominal":
@@ -115,31 +115,31 @@ def build_house(case: str, start: str, magnitude: float | None):
 
         return load_house("house1", start=start), {"plant": "ideal twin (plant.house.load_house)"}
     ideal = {"enabled": False}
+    knobs = dict(network={}, storage_layers=40, inlet_mixing_layers=1, sensor_lag={}, overrides={})
     if case == "concealed_idle_flow":
         if not mag > 0:
             raise ConfigError(f"--magnitude {mag}: the conductance factor must be > 0")
-        k = net.NetworkParams().k_chp / mag**2
-        h = load_truth("house1", start=start, network={"k_chp": k}, storage_layers=80, inlet_mixing_layers=2)
+        knobs.update(network={"k_chp": net.NetworkParams().k_chp / mag**2}, storage_layers=80,
+                     inlet_mixing_layers=2)
     elif case == "storage_heat_loss":
-        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=1,
-                       overrides={"storage.UA_loss": mag})
+        knobs.update(network=ideal, overrides={"storage.UA_loss": mag})
     elif case == "sensor_lag":
-        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=1,
-                       sensor_lag={10: mag})
+        knobs.update(network=ideal, sensor_lag={10: mag})
     else:  # storage_mixing
         layer_l = 800.0 / 40
-        n_mix = max(1, int(round(mag / layer_l)))
-        h = load_truth("house1", start=start, network=ideal, storage_layers=40, inlet_mixing_layers=n_mix)
+        knobs.update(network=ideal, inlet_mixing_layers=max(1, int(round(mag / layer_l))))
+    h = load_truth("house1", start=start, **knobs)
+    network = {**asdict(net.NetworkParams()), **knobs["network"]}
+    n_layers = knobs["storage_layers"]
     params = {
-        "plant": "plant.truth.TruthHouse (pressure-driven network)" if h.net_params.enabled
-        else "plant.truth.TruthHouse (ideal switch)",
-        "network": asdict(h.net_params),
-        "storage_layers": h._params["storage"].n_layers,
-        "storage_UA_loss_W_per_K": h._params["storage"].UA_loss,
-        "inlet_mixing_layers": h.inlet_mixing_layers,
-        "inlet_mixing_litres": h.inlet_mixing_layers * 1000.0 * h._params["storage"].volume
-        / h._params["storage"].n_layers,
-        "sensor_lag_s": {str(i + 1): float(v) for i, v in enumerate(h.sensor_lag) if v > 0},
+        "plant": "house1_truth (pressure-driven network)" if network["enabled"]
+        else "house1_truth (ideal switch)",
+        "network": network,
+        "storage_layers": n_layers,
+        "storage_UA_loss_W_per_K": knobs["overrides"].get("storage.UA_loss", 20.0),
+        "inlet_mixing_layers": knobs["inlet_mixing_layers"],
+        "inlet_mixing_litres": knobs["inlet_mixing_layers"] * 1000.0 * 0.8 / n_layers,
+        "sensor_lag_s": {str(k): float(v) for k, v in knobs["sensor_lag"].items() if v > 0},
     }
     return h, params
 
@@ -159,7 +159,7 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
     rng = np.random.default_rng(seed)
     house, params = build_house(case, start, magnitude)
     mag = CASES[case][1] if magnitude is None else float(magnitude)
-    is_truth = hasattr(house, "aux")
+    is_truth = case != "nominal"
     n = int(days * 86400 // sample)
     grid = np.arange(1, n + 1) * sample
     offs = rng.integers(-jitter, jitter + 1, size=n) if jitter else np.zeros(n, dtype=int)

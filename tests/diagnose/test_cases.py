@@ -98,7 +98,7 @@ def test_concealed_idle_flow_is_named_sized_and_fixes_the_chp_heat(tmp_path):
 
 
 def test_idle_flow_knob_is_recovered():
-    # the twin itself with connections.idle_flow_chp = 0.25 (no suction): the joint candidate must
+    # the twin itself with switch.idle_flow.chp = 0.25 (no suction): the joint candidate must
     # recover the idle share (a coupling share below the CHP's own pump flow has no effect, so it
     # is not identifiable here and not asserted)
     rec = synth.make("idle_generator_flow", 0.25, days=1.2)

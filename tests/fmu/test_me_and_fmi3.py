@@ -169,13 +169,13 @@ def test_a_model_exchange_fmu_as_the_whole_plant(lag, tmp_path):
 
 
 def test_house_file_errors_name_file_line_and_key(lag, tmp_path):
-    from plant import housefile
+    from plant.house import load_spec
 
     bad = write_house(tmp_path / "bad.toml", lag["me2"], 'solver_x = 1\n',
                       '"storage.T_tpo" = "T"\n"boiler.U_set" = { var = "P", unit = "kW" }\n'
                       '"zone.T_room" = 42')
     with pytest.raises(ConfigError) as exc:
-        housefile.load(bad)
+        load_spec(bad)
     msg = str(exc.value)
     assert "bad.toml:7 [house] solver_x: unknown for an FMU plant; did you mean solver?" in msg
     assert "bad.toml:10 [bindings] storage.T_tpo: not a signal of the catalogue" in msg and "storage.T_top" in msg
@@ -184,11 +184,11 @@ def test_house_file_errors_name_file_line_and_key(lag, tmp_path):
     nofile = tmp_path / "nofile.toml"
     nofile.write_text('[house]\nname = "x"\ntopology = "fmu"\nfmu = "gone.fmu"\nsolver = "Euler"\n[chp]\n')
     with pytest.raises(ConfigError) as exc:
-        housefile.load(nofile)
+        load_spec(nofile)
     msg = str(exc.value)
     assert "nofile.toml:4 [house] fmu = 'gone.fmu': no such file" in msg
     assert "nofile.toml:5 [house] solver = \"Euler\": needs step_size" in msg
     assert "nofile.toml:6 [chp]: not used when the plant is an FMU" in msg
     assert "needs a [bindings] table" in msg
     with pytest.raises(ConfigError, match="overrides .* apply to native houses only"):
-        housefile.load(write_house(tmp_path / "ok.toml", lag["me2"]), {"storage.UA_loss": 1.0})
+        load_spec(write_house(tmp_path / "ok.toml", lag["me2"]), {"storage.UA_loss": 1.0})

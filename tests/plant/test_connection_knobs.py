@@ -7,7 +7,7 @@ import pytest
 from plant.catalogue import CATALOGUE
 from plant.errors import ConfigError
 from plant.house import load_house
-from plant.solver import inlet
+from plant.connections.coupling_point import inlet
 
 DAY = 86400.0
 
@@ -30,7 +30,7 @@ def test_inlet_mixing_degrades_stratification_and_keeps_the_balance():
     i_top, i_bot = CATALOGUE.index("storage.T_sensor_10"), CATALOGUE.index("storage.T_sensor_1")
     spread = {}
     for v in (0.0, 0.2):
-        h = load_house("house1", start="2021-01-10", overrides={"connections.storage_inlet_mixing": v})
+        h = load_house("house1", start="2021-01-10", overrides={"switch.storage_inlet_mixing": v})
         _, rows = h.run(DAY, dt=1.0, out_interval=600.0)
         assert h.ledger()["closure"] < 1e-9
         spread[v] = float(np.mean(rows[:, i_top] - rows[:, i_bot]))
@@ -38,7 +38,7 @@ def test_inlet_mixing_degrades_stratification_and_keeps_the_balance():
 
 
 def test_forced_chp_flow_is_seen_by_the_branch_not_by_the_units_counter():
-    h = load_house("house1", start="2021-01-10", overrides={"connections.idle_flow_chp": 0.4})
+    h = load_house("house1", start="2021-01-10", overrides={"switch.idle_flow.chp": 0.4})
     _, rows = h.run(DAY, dt=1.0, out_interval=60.0)
     assert h.ledger()["closure"] < 1e-9
     col = {n: CATALOGUE.index(n) for n in ("chp.m_flow", "chp.m_flow_pump", "chp.Q_flow", "chp.Q_flow_meter")}
@@ -52,5 +52,5 @@ def test_forced_chp_flow_is_seen_by_the_branch_not_by_the_units_counter():
 
 def test_bad_inlet_mixing_names_the_key_and_the_range():
     with pytest.raises(ConfigError) as e:
-        load_house("house1", overrides={"connections.storage_inlet_mixing": 0.6})
+        load_house("house1", overrides={"switch.storage_inlet_mixing": 0.6})
     assert "storage_inlet_mixing" in str(e.value) and "half the storage volume" in str(e.value)

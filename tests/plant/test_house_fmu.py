@@ -1,11 +1,10 @@
-"""House 1 with its heating storage as the C storage FMU (plant/fmu/build.py), stepped from Python
-between solver.before_storage and solver.after_storage; the split path itself reproduces run()."""
+"""House 1 with its heating storage as the C storage FMU (plant/fmu/build.py): the `storage_fmu`
+kind, called from the compiled step."""
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from plant import solver
 from plant.catalogue import CATALOGUE
 from plant.errors import ConfigError
 from plant.house import load_house
@@ -37,8 +36,8 @@ T_init_bottom = { value = 45.0, unit = "degC" }
 
 
 def fmu_house_file(tmp_path, fmu, bindings=BINDINGS, fmu_line=None):
-    text = HOUSE1.read_text()
-    anchor = "T_init_bottom = 45.0\n"
+    text = HOUSE1.read_text().replace('kind = "storage"\n', 'kind = "storage_fmu"\n', 1)
+    anchor = "soc_Tmax = 80.0\n"
     assert anchor in text
     line = fmu_line if fmu_line is not None else f'fmu = "{fmu}"\n'
     path = tmp_path / "house1_fmu.toml"
@@ -52,22 +51,6 @@ def storage_fmu(tmp_path_factory):
     from plant.fmu.build import build_storage_fmu
 
     return build_storage_fmu(cache_dir=tmp_path_factory.getbasetemp() / "fmu-cache")
-
-
-def test_split_step_reproduces_the_compiled_loop_bit_for_bit():
-    """before_storage -> storage_step -> after_storage from Python == run(): the two copies of the
-    step in solver.py must not drift apart."""
-    a, b = load_house("house1"), load_house("house1")
-    h, n = 1.0, 2 * 3600
-    a.run(n * h, dt=h, out_interval=60.0)
-    for _ in range(n):
-        mid = solver.before_storage(b.t, h, b._x, b._p, b._tabs, b._prof, b._ports, b._s, b._remote)
-        q = solver.storage_step(h, b._x, b._p, b._ports)
-        solver.after_storage(b.t, h, b._x, b._p, b._ports, b._s, b._ledger, mid, q)
-        b.t += h
-    assert np.array_equal(a._s, b._s)
-    assert np.array_equal(a._ledger, b._ledger)
-    assert all(np.array_equal(u, v) for u, v in zip(a._x, b._x))
 
 
 def test_house_with_fmu_storage_closes_its_balance_and_matches_native(storage_fmu, tmp_path):
@@ -134,8 +117,8 @@ def test_unit_disagreeing_with_the_fmu_is_an_fmu_error(storage_fmu, tmp_path):
 
 def test_ports_must_be_the_top_and_bottom_layers(storage_fmu, tmp_path):
     path = fmu_house_file(tmp_path, storage_fmu)
-    path.write_text(path.read_text().replace("storage_top_port = 1.60", "storage_top_port = 1.20"))
-    with pytest.raises(ConfigError, match=r"storage_top_port: the storage FMU has ports only in its top"):
+    path.write_text(path.read_text().replace("storage_top = 1.60", "storage_top = 1.20"))
+    with pytest.raises(ConfigError, match=r"storage_top: the storage FMU has ports only in its top"):
         load_house(path)
 
 

@@ -17,9 +17,9 @@ DAYS = 7
 CASES = {
     "house1_rule_based": ("2021-01-10", {}),
     "house1_heating_curve": ("2021-03-01", {"thermostat.curve": True}),
-    "house1_knobs": ("2021-01-10", {"connections.idle_flow_chp": 0.3,
-                                    "connections.pump_coupling_chp": 0.1,
-                                    "connections.storage_inlet_mixing": 0.05,
+    "house1_knobs": ("2021-01-10", {"switch.idle_flow.chp": 0.3,
+                                    "switch.pump_coupling.chp": 0.1,
+                                    "switch.storage_inlet_mixing": 0.05,
                                     "mixer.leak": 0.05}),
 }
 

@@ -19,9 +19,9 @@ class IdleGeneratorFlow(Effect):
 
     Two symptoms of the one cause, fitted jointly: when the consumers draw more than the boiler
     delivers, a share of that deficit returns through the CHP branch instead of the storage
-    (connections.idle_flow_chp; an idle CHP is flushed, a running one pushed past its own pump);
+    (switch.idle_flow.chp; an idle CHP is flushed, a running one pushed past its own pump);
     and the boiler pump may push part of its own flow through the CHP on a shared header
-    (connections.pump_coupling_chp). The second is fitted only when the recording has
+    (switch.pump_coupling.chp). The second is fitted only when the recording has
     CHP-and-boiler periods, so the first cannot imitate it.
     The named size is the idle flow; the suction is reported next to it.
     """
@@ -31,13 +31,13 @@ class IdleGeneratorFlow(Effect):
     params = (Param("idle_flow_chp", 0.0, 0.8, 0.0, "1 (share of the consumers' flow deficit vs the boiler)"),
               Param("pump_coupling_chp", 0.0, 0.8, 0.0, "1 (share of the boiler flow, through the CHP)"))
     description = ("the CHP branch is open to the header: part of the heating circuit's primary flow "
-                   "deficit short-circuits through the CHP branch (connections.idle_flow_chp) and, jointly, the "
-                   "boiler pump pushes part of its flow through the CHP (connections.pump_coupling_chp)")
+                   "deficit short-circuits through the CHP branch (switch.idle_flow.chp) and, jointly, the "
+                   "boiler pump pushes part of its flow through the CHP (switch.pump_coupling.chp)")
 
     def overrides(self, theta):
-        ov = {"connections.idle_flow_chp": float(theta[0])}
+        ov = {"switch.idle_flow.chp": float(theta[0])}
         if len(theta) > 1:
-            ov["connections.pump_coupling_chp"] = float(theta[1])
+            ov["switch.pump_coupling.chp"] = float(theta[1])
         return ov
 
     def fitted(self, ctx):
@@ -120,10 +120,10 @@ class PumpCoupling(Effect):
     kind = "simulate"
     params = (Param("pump_coupling_chp", 0.0, 0.8, 0.0, "1 (share of the boiler flow)"),)
     description = ("the boiler pump pushes part of its flow through the CHP (hydraulic coupling "
-                   "of the generator pumps; connections.pump_coupling_chp)")
+                   "of the generator pumps; switch.pump_coupling.chp)")
 
     def overrides(self, theta):
-        return {"connections.pump_coupling_chp": float(theta[0])}
+        return {"switch.pump_coupling.chp": float(theta[0])}
 
     def plausible(self, ctx):
         if ctx.mode_share("boiler_on") < 0.02:

@@ -38,7 +38,7 @@ class HeaderHeatLoss(Effect):
 class StorageMixing(Effect):
     """Mixing in the heating storage where it happens in a real tank: an inflow does not stay in
     its port layer but entrains the water next to it (inlet plume), so it spreads over a volume
-    beyond the port layer (connections.storage_inlet_mixing) and the thermocline degrades at
+    beyond the port layer (switch.storage_inlet_mixing) and the thermocline degrades at
     every charge and discharge. (A still-water conductance, storage.UA_layer, stays nominal: it
     mixes everywhere and always, which the recordings of an inlet plume contradict.)"""
     id = "storage_mixing"
@@ -46,10 +46,10 @@ class StorageMixing(Effect):
     kind = "simulate"
     params = (Param("inlet_mixing", 0.0, 0.4, 0.0, "m3 beyond the port layer"),)
     description = ("inlet plume / inter-layer mixing in the heating storage: each inflow spreads over "
-                   "a volume beyond its port layer (connections.storage_inlet_mixing)")
+                   "a volume beyond its port layer (switch.storage_inlet_mixing)")
 
     def overrides(self, theta):
-        return {"connections.storage_inlet_mixing": float(theta[0])}
+        return {"switch.storage_inlet_mixing": float(theta[0])}
 
     def summary(self, theta, ctx, sim=None):
         return f"each storage inflow spreads over {theta[0] * 1000:.0f} l beyond its port layer (nominal 0)"

@@ -1,4 +1,4 @@
-"""Pressure-driven hydraulic network of house 1's generator side (the "truth" plant).
+"""Pressure-driven hydraulics of a coupling point with two generators (`hydraulics = "pressure_driven"`).
 
 Topology (the layout of the twin's hydraulic switch; R = return header is the pressure
 reference, p_R = 0, S = supply header; one unknown pressure p_S):

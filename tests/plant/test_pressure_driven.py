@@ -1,8 +1,8 @@
-"""Pressure-driven network of the truth: mass conservation, idle flow, parallel generators."""
+"""Pressure-driven hydraulics of a coupling point: mass conservation, idle flow, parallel generators."""
 import numpy as np
 import pytest
 
-from plant.truth import hydraulic_network as net
+from plant.hydraulics import pressure_driven as net
 
 P = net.pack(net.NetworkParams())
 

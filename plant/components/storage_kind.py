@@ -1,0 +1,146 @@
+"""The stratified storage as a component kind: its ports, sensors, signals and ledger in the step.
+
+Connections attach to a storage by height (plant/compiler.py StoragePorts): inlets, outlets and
+coils in any number. The kernel (plant/components/storage.py) takes them as arrays, so a storage
+with five inlets, a coil and a draw costs one call per step.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..component import Kind as ComponentKind, pack
+from ..water import CP, RHO
+from . import storage
+
+
+@njit(cache=True)
+def sensors(T, s, first, n_sensors):
+    """Write n_sensors temperatures (1 = bottom ... n = top) at equally spaced heights."""
+    n = T.shape[0]
+    for k in range(n_sensors):
+        z = (k + 0.5) / n_sensors  # height fraction of sensor k+1
+        pos = (1.0 - z) * n - 0.5  # position in layer-centre coordinates, layer 0 = top
+        if pos <= 0.0:
+            v = T[0]
+        elif pos >= n - 1:
+            v = T[n - 1]
+        else:
+            i = int(pos)
+            w = pos - i
+            v = T[i] * (1.0 - w) + T[i + 1] * w
+        s[first + k] = v
+
+
+@njit(cache=True)
+def lag(s, first, x_lag, tau, h, update):
+    """Replace sensor signals by first-order filtered ones (time constants tau [s], 0 = none):
+    a sensor in a thermowell. Called after `sensors`; the filter advances only when `update`."""
+    for k in range(tau.shape[0]):
+        if tau[k] > 0.0:
+            raw = s[first + k]
+            if not math.isfinite(x_lag[k]):
+                x_lag[k] = raw
+            if update:
+                x_lag[k] += -math.expm1(-h / tau[k]) * (raw - x_lag[k])
+            s[first + k] = x_lag[k]
+
+
+class Kind(ComponentKind):
+    name = "storage"
+    Params = storage.Params
+    role = "storage"
+    LINKS = {"sensors": (10, "number of temperature sensors at equally spaced heights (1 = bottom)"),
+             "sensor_lag": ({}, "sensor number = first-order time constant [s] (an effect: thermowell lag)")}
+
+    def initial_state(self, inst):
+        return storage.initial_state(inst.params)
+
+    def stored_energy(self, inst, x):
+        return CP * RHO * inst.params.volume / inst.params.n_layers * float(x.sum())
+
+    def emit(self, c, inst):
+        x, p, Ql = self.emit_signals(c, inst)
+        Qc = c.var("Q_coil")
+        c.values[f"{inst.name}.Q_coil"] = Qc
+        a = inst.name
+        smod = c.module(storage.__name__)
+        c.emit("storages", f"{Ql}, {Qc} = {smod}.step(h, {x}, {p}, {a}_in_layer, {a}_in_m, {a}_in_T, "
+                           f"{a}_out_layer, {a}_out_m, {a}_out_T, {a}_coil_top, {a}_coil_bot, {a}_coil_UA, "
+                           f"{a}_coil_m, {a}_coil_Tin, {a}_coil_Tout, {a}_q)")
+
+    def emit_signals(self, c, inst):
+        """State, parameters, sensors, signals and ledger of a storage; returns (state view,
+        parameter view, the local its step's heat loss goes into)."""
+        x = c.state(inst, self.initial_state(inst))
+        p = c.param(inst, pack(inst.params))
+        n = inst.options["sensors"]
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
+            c.problems.append(f"{inst.where} sensors = {n!r}: must be an integer 1 … 100")
+            n = 10
+        first = [c.signal(inst, f"T_sensor_{i}", "degC", "output",
+                          f"sensor {i} of {n} (1 = bottom, {n} = top)") for i in range(1, n + 1)][0]
+        first = first[2:-1]  # the slot index inside s[...] (resolved at assembly)
+        mod = c.module(__name__)
+        c.emit("sense", f"{mod}.sensors({x}, s, {first}, {n})")
+        lag_call = self._lag(c, inst, n, first)
+        if lag_call:
+            c.emit("sense", lag_call.format(update="False"))
+        Ql = c.var("Q_loss")
+        i_vol, i_t0, i_tmax = storage.I_VOLUME, storage.I_SOC_T0, storage.I_SOC_TMAX
+        mean = c.var("mean")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{mod}.sensors({x}, s, {first}, {n})",  # end-of-step values: what the next step's controller sees
+               *([lag_call.format(update="True")] if lag_call else []),
+               f"{mean} = {x}.mean()",
+               f"{sig('T_top', 'degC', 'top layer')} = {x}[0]",
+               f"{sig('T_bot', 'degC', 'bottom layer')} = {x}[{x}.shape[0] - 1]",
+               f"{sig('SOC', '1', 'state of charge (mean - soc_T0)/(soc_Tmax - soc_T0)')} = "
+               f"({mean} - {p}[{i_t0}]) / ({p}[{i_tmax}] - {p}[{i_t0}])",
+               f"{sig('E_stored', 'J', 'stored heat above soc_T0')} = CP * RHO * {p}[{i_vol}] * ({mean} - {p}[{i_t0}])",
+               f"{sig('Q_loss', 'W', 'heat loss to the room')} = {Ql}",
+               f"{c.ledger_entry(inst, 'loss')} += {Ql} * h")
+        return x, p, Ql
+
+    def _lag(self, c, inst, n, first):
+        """The lag call (with {update} to fill in), or None when no sensor lags."""
+        table = inst.options.get("sensor_lag") or {}
+        if not isinstance(table, dict):
+            c.problems.append(f"{inst.at('sensor_lag')} = {table!r}: expected {{ sensor = seconds }}")
+            return None
+        if not table:
+            return None
+        tau = np.zeros(n)
+        for key, v in table.items():
+            ok = str(key).isdigit() and 1 <= int(key) <= n
+            if not ok or isinstance(v, bool) or not isinstance(v, (int, float)) or not v >= 0:
+                c.problems.append(f"{inst.at('sensor_lag')}.{key} = {v!r}: sensor 1 … {n}, time constant >= 0 s")
+                continue
+            tau[int(key) - 1] = float(v)
+        x_lag = c.state(inst, np.full(n, np.nan), suffix="_lag")
+        p_lag = c.param(inst, tau, suffix="_lag")
+        return f"{c.module(__name__)}.lag(s, {first}, {x_lag}, {p_lag}, h, {{update}})"
+
+    def allocate(self, c, inst, ports):
+        """The port arrays, once every connection has asked for its slots."""
+        a = inst.name
+        in_layer = np.zeros(ports.n_in, dtype=np.int64)
+        for slot, layer in ports.fixed_in:
+            in_layer[slot] = layer
+        out_layer = np.zeros(ports.n_out, dtype=np.int64)
+        for slot, layer in ports.fixed_out:
+            out_layer[slot] = layer
+        top = [t for _, t, _ in sorted(ports.coils)]
+        bot = [b for _, _, b in sorted(ports.coils)]
+        c.header.extend([
+            f"{a}_in_layer = {c.int_array(in_layer)}", f"{a}_in_m = {c.float_array(ports.n_in)}",
+            f"{a}_in_T = {c.float_array(ports.n_in)}",
+            f"{a}_out_layer = {c.int_array(out_layer)}", f"{a}_out_m = {c.float_array(ports.n_out)}",
+            f"{a}_out_T = {c.float_array(ports.n_out)}",
+            f"{a}_coil_top = {c.int_array(top)}", f"{a}_coil_bot = {c.int_array(bot)}",
+            f"{a}_coil_UA = {c.float_array(ports.n_coil)}", f"{a}_coil_m = {c.float_array(ports.n_coil)}",
+            f"{a}_coil_Tin = {c.float_array(ports.n_coil)}", f"{a}_coil_Tout = {c.float_array(ports.n_coil)}",
+            f"{a}_q = {c.float_array(inst.params.n_layers)}"])

@@ -1,0 +1,60 @@
+"""A generator piped straight to a storage (no coupling point), optionally through a three-way
+valve to two storage heights (the lab's SwitchPort, reference §8.4).
+
+The generator draws water from the storage at the `return` height and feeds it back at the
+`supply` height, with its own pump's flow. With `supply = { upper = 1.4, lower = 0.7 }` (and
+likewise `return`) the input `<name>.upper` (0/1) routes the whole flow to the upper or to the
+lower port pair: no proportional mixing, as the original. The generator sees the start-of-step
+temperature of the layer it draws from, so the storage kernel's port bookkeeping keeps the
+ledger exact.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..component import REQUIRED, Kind as ComponentKind
+
+
+class Kind(ComponentKind):
+    name = "branch"
+    role = "connection"
+    REFS = {"generator": "generator", "storage": "storage"}
+    LINKS = {"generator": (REQUIRED, "the generator on this branch"),
+             "storage": (REQUIRED, "the storage it charges"),
+             "supply": (REQUIRED, "height of the supply inlet [m], or { upper = ..., lower = ... }"),
+             "return": (REQUIRED, "height of the return outlet [m], or { upper = ..., lower = ... }")}
+
+    def _heights(self, c, inst, key, st):
+        v = inst.options[key]
+        if isinstance(v, dict):
+            unknown = set(v) - {"upper", "lower"}
+            if unknown or set(v) != {"upper", "lower"}:
+                c.problems.append(f"{inst.at(key)} = {v!r}: a three-way valve needs {{ upper = ..., lower = ... }}")
+                return 0, 0
+            layers = []
+            for side in ("upper", "lower"):
+                inst.options[f"{key}.{side}"] = v[side]
+                inst.lines.setdefault(f"{key}.{side}", inst.lines.get(key))
+                layers.append(c.port_layer(inst, f"{key}.{side}", st))
+            return tuple(layers)
+        layer = c.port_layer(inst, key, st)
+        return layer, layer
+
+    def emit(self, c, inst):
+        st, gen = inst.options["storage"], c.instances[inst.options["generator"]]
+        sup = self._heights(c, inst, "supply", st)
+        ret = self._heights(c, inst, "return", st)
+        valve = isinstance(inst.options["supply"], dict) or isinstance(inst.options["return"], dict)
+        p = c.param(inst, np.array([*sup, *ret], dtype=np.float64))
+        ports = c.storage_ports(st)
+        i, j = ports.add_inlet(inst, "supply", None), ports.add_outlet(inst, "return", None)
+        up = c.signal(inst, "upper", "1", "input", "three-way valve: 1 = upper port pair, 0 = lower") if valve else "1.0"
+        T_in, side = c.var("T_in"), c.var("upper")
+        c.emit("hydraulics",
+               f"{side} = {up} > 0.5",
+               f"{st}_in_layer[{i}] = int({p}[0]) if {side} else int({p}[1])",
+               f"{st}_out_layer[{j}] = int({p}[2]) if {side} else int({p}[3])",
+               f"{T_in} = x_{st}[{st}_out_layer[{j}]]")
+        m, T = c.kinds[gen.kind].emit_generator(c, gen, T_in, "0.0")
+        c.emit("hydraulics", f"{st}_in_m[{i}] = {m}", f"{st}_in_T[{i}] = {T} if {m} > 0.0 else {T_in}",
+               f"{st}_out_m[{j}] = {m}")

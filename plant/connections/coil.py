@@ -1,0 +1,55 @@
+"""A coil through a storage, fed from a coupling point by its own pump (the DHW charging loop).
+
+The coil spans the storage layers between the heights `top` and `bottom`; its fluid enters at
+the top at the coupling point's supply temperature and returns to the coupling point's return at
+the coil outlet temperature (the storage kernel's exact segment-wise exchanger). The pump runs at
+`m_flow` while the input `<name>.on` is 1. With no flow the return sees the supply temperature,
+so no heat is moved.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
+
+
+@dataclass(frozen=True)
+class Params:
+    UA: float = param(640.0, "W/K", "coil conductance (area x heat-transfer coefficient)", 0.0, 1e6)
+    m_flow: float = param(0.333, "kg/s", "pump flow when on", 0.0, 10.0)
+
+
+UA, M_FLOW = range(2)
+
+
+class Kind(ComponentKind):
+    name = "coil"
+    Params = Params
+    role = "consumer"
+    REFS = {"storage": "storage"}
+    LINKS = {"storage": (REQUIRED, "the storage the coil is in"),
+             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom]"),
+             "bottom": (REQUIRED, "height of the coil outlet [m]")}
+
+    def emit_consumer(self, c, inst, T_sup):
+        p = c.param(inst, pack(inst.params))
+        st = inst.options["storage"]
+        top, bottom = c.port_layer(inst, "top", st), c.port_layer(inst, "bottom", st)
+        if isinstance(inst.options["top"], (int, float)) and isinstance(inst.options["bottom"], (int, float)) \
+                and inst.options["top"] < inst.options["bottom"]:
+            c.problems.append(f"{inst.where} top = {inst.options['top']}: must be above bottom = "
+                              f"{inst.options['bottom']}")
+        k = c.storage_ports(st).add_coil(inst, top, bottom)
+        on = c.signal(inst, "on", "1", "input", "charging pump command (0/1)")
+        m = c.var("m_coil")
+        c.emit("hydraulics",
+               f"{m} = {p}[{M_FLOW}] if {on} > 0.5 else 0.0",
+               f"{st}_coil_m[{k}] = {m}",
+               f"{st}_coil_Tin[{k}] = {T_sup}",
+               f"{st}_coil_UA[{k}] = {p}[{UA}]")
+        Q = c.values.get(f"{st}.Q_coil") if c.storage_ports(st).n_coil == 1 else None
+        Q = Q or f"{m} * CP * ({st}_coil_Tin[{k}] - {st}_coil_Tout[{k}])"
+        c.emit("signals",
+               f"{c.signal(inst, 'm_flow', 'kg/s', 'output', 'charging flow through the coil')} = {m}",
+               f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat given by the coil to the storage')} = {Q}")
+        return m, f"({st}_coil_Tout[{k}] if {m} > 0.0 else {T_sup})"

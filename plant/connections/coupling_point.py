@@ -1,0 +1,196 @@
+"""The coupling point (the lab's hydraulic switch, reference §8): generators, consumers and a
+storage on one supply and one return header.
+
+Prescribed flows (`hydraulics = "prescribed"`, the original's ideal switch): every branch flow is
+imposed by its own pump; the storage takes the balance. Surplus generator flow enters the storage
+at its `storage_top` port and leaves at `storage_bottom`; a deficit is drawn from the top and
+replaced at the bottom. Generators receive the return header, consumers the supply header; the
+headers are mixed volumes (`supply`, `return`: header instances) that take what flows in with
+start-of-step outflow temperatures, so the ledger closes to round-off.
+
+Effects the ideal switch leaves out, declared per generator (0 = the original's behaviour):
+  idle_flow = { chp = 0.3 }       share of the consumers' flow deficit left by the generators
+                                  listed before it that returns through its branch (no check valve)
+  pump_coupling = { chp = 0.1 }   share of the flow of the generators listed before it pushed
+                                  through its branch (suction on a shared header)
+  storage_inlet_mixing = 0.05     m3 beyond the port layer over which a storage inflow spreads
+A generator takes max(own pump flow, forced flow) (plant/hydraulics/prescribed.py).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..component import REQUIRED, Kind as ComponentKind
+
+
+class Kind(ComponentKind):
+    name = "coupling_point"
+    role = "connection"
+    REFS = {"generators": "generator", "consumers": "consumer", "storage": "storage",
+            "supply": "volume", "return": "volume"}
+    LINKS = {"hydraulics": ("prescribed", "prescribed (ideal switch) or pressure_driven"),
+             "generators": (REQUIRED, "generator instances on the point, in the order they are stepped"),
+             "consumers": ((), "consumer instances (pumped: mixing stations, coils)"),
+             "storage": (REQUIRED, "the storage that separates generators and consumers"),
+             "storage_top": (REQUIRED, "height of the storage's upper port [m]"),
+             "storage_bottom": (REQUIRED, "height of the storage's lower port [m]"),
+             "storage_inlet_mixing": (0.0, "m3 beyond the port layer over which an inflow spreads"),
+             "supply": (REQUIRED, "the supply header (a header instance)"),
+             "return": (REQUIRED, "the return header (a header instance)"),
+             "idle_flow": ({}, "generator = share of the consumers' deficit through its branch"),
+             "pump_coupling": ({}, "generator = share of the earlier generators' flow through it"),
+             "network": ({}, "pressure_driven: resistances and pump curves (plant/hydraulics/pressure_driven.py)")}
+
+    def emit(self, c, inst):
+        o = inst.options
+        st = c.instances[o["storage"]]
+        gens = [c.instances[g] for g in o["generators"]]
+        cons = [c.instances[k] for k in o["consumers"]]
+        forced = sorted(set(o["idle_flow"]) | set(o["pump_coupling"]), key=o["generators"].index)
+        mix = float(o["storage_inlet_mixing"])
+        if not 0.0 <= mix <= 0.5 * st.params.volume:
+            c.problems.append(f"{inst.where} storage_inlet_mixing = {mix:g}: must be 0 … "
+                              f"{0.5 * st.params.volume:g} m3 (half the storage volume)")
+        mix_layers = mix / (st.params.volume / st.params.n_layers)
+        pv = [c.port_layer(inst, "storage_top", st.name), c.port_layer(inst, "storage_bottom", st.name),
+              mix_layers]
+        for g in forced:
+            pv += [float(o["idle_flow"].get(g, 0.0)), float(o["pump_coupling"].get(g, 0.0))]
+        p = c.param(inst, np.array(pv))
+        x_sh, p_sh = c.kinds[c.instances[o["supply"]].kind].views(c, c.instances[o["supply"]])
+        x_rh, p_rh = c.kinds[c.instances[o["return"]].kind].views(c, c.instances[o["return"]])
+        T_sh, T_rh = c.var("T_sup"), c.var("T_ret")
+        c.emit("hydraulics", f"{T_sh} = {x_sh}[0]", f"{T_rh} = {x_rh}[0]")
+        demand = [c.kinds[k.kind].emit_consumer(c, k, T_sh) for k in cons]
+        m_dem = c.var("m_dem")
+        c.emit("hydraulics", f"{m_dem} = {' + '.join(m for m, _ in demand) or '0.0'}")
+        hyd = c.module("plant.hydraulics.prescribed")
+        if o["hydraulics"] == "pressure_driven":
+            flows = self._pressure_driven(c, inst, gens, m_dem, T_rh)
+        else:
+            flows = []
+            for g in gens:
+                m_ext = "0.0"
+                if g.name in forced:
+                    j = 3 + 2 * forced.index(g.name)
+                    before = " + ".join(m for m, _ in flows) or "0.0"
+                    m_ext = c.var("m_ext")
+                    c.emit("hydraulics", f"{m_ext} = {hyd}.forced_generator_flows({m_dem}, {before}, "
+                                         f"{p}[{j}], {p}[{j + 1}])")
+                flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
+        m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
+        ports = c.storage_ports(st.name)
+        n_in = 1 + math.ceil(mix_layers - 1e-12) if mix_layers > 0.0 else 1
+        i0 = ports.add_inlet(inst, "storage_in", None, n_in)
+        j = ports.add_outlet(inst, "storage_out", None)
+        a = st.name
+        c.values[f"{a}.fmu_inputs"] = (f"({m_ch} - {m_dis})", T_sh, T_rh)
+        if st.kind == "storage_fmu":
+            for key, want in (("storage_top", 0), ("storage_bottom", st.params.n_layers - 1)):
+                if pv[0 if key == "storage_top" else 1] != want:
+                    c.problems.append(f"{inst.at(key)}: the storage FMU has ports only in its top and "
+                                      f"bottom layers; this height is in layer {pv[0 if key == 'storage_top' else 1]} "
+                                      f"of 0 … {st.params.n_layers - 1}")
+        cmod = c.module(__name__)
+        c.emit("hydraulics",
+               f"{m_gen} = {' + '.join(m for m, _ in flows)}",
+               f"{m_ch}, {m_dis} = {hyd}.split({m_gen}, {m_dem})",
+               f"{cmod}.inlet({a}_in_layer[{i0}:{i0 + n_in}], {a}_in_m[{i0}:{i0 + n_in}], "
+               f"{a}_in_T[{i0}:{i0 + n_in}], {p}[2], x_{a}.shape[0], {m_ch} > 0.0, "
+               f"int({p}[0]) if {m_ch} > 0.0 else int({p}[1]), {m_ch} if {m_ch} > 0.0 else {m_dis}, "
+               f"{T_sh} if {m_ch} > 0.0 else {T_rh})",
+               f"if {m_ch} > 0.0:",
+               f"    {a}_out_layer[{j}] = int({p}[1])",
+               f"    {a}_out_m[{j}] = {m_ch}",
+               "else:",
+               f"    {a}_out_layer[{j}] = int({p}[0])",
+               f"    {a}_out_m[{j}] = {m_dis}")
+        pipe = c.module("plant.components.pipe")
+        Hs, Hr, Qs, Qr = (c.var(v) for v in ("H_sup", "H_ret", "Q_loss_sup", "Q_loss_ret"))
+        h_gen = " + ".join(f"{m} * CP * {T}" for m, T in flows)
+        h_con = " + ".join(f"{m} * CP * {T}" for m, T in demand)
+        m_con = " + ".join(m for m, _ in demand)
+        c.emit("volumes",
+               f"{Hs} = {h_gen} + {m_dis} * CP * {a}_out_T[{j}]",
+               f"{Qs} = {pipe}.step(h, {x_sh}, {p_sh}, {Hs}, {m_gen} + {m_dis})",
+               f"{Hr} = {h_con + ' + ' if h_con else ''}{m_ch} * CP * {a}_out_T[{j}]",
+               f"{Qr} = {pipe}.step(h, {x_rh}, {p_rh}, {Hr}, {m_con + ' + ' if m_con else ''}{m_ch})")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_sup', 'degC', 'supply header temperature')} = {T_sh}",
+               f"{sig('T_ret', 'degC', 'return header temperature (what the generators receive)')} = {T_rh}",
+               f"{sig('Q_loss', 'W', 'heat loss of both headers')} = {Qs} + {Qr}",
+               f"{c.named_signal(f'{a}.m_flow', 'kg/s', 'output', 'net charging flow through the coupling point (+ charging through the top, - discharging)', st.order)} = {m_ch} - {m_dis}",
+               f"{c.ledger_entry(inst, 'loss')} += ({Qs} + {Qr}) * h")
+
+
+    def _pressure_driven(self, c, inst, gens, m_dem, T_rh):
+        """Two generators on the network of plant/hydraulics/pressure_driven.py: the first behind
+        a check valve with its flow imposed by its pump, the second without one, so the header
+        pressure may force flow through it (it takes max(own pump flow, forced flow)). Its own
+        pump's request is read from a scratch step of its state: what its heat counter sees."""
+        from ..hydraulics import pressure_driven as net
+
+        if len(gens) != 2:
+            c.problems.append(f"{inst.at('generators')}: pressure_driven hydraulics take two generators "
+                              "(the first behind a check valve, the second without); got "
+                              f"{len(gens)}")
+            return []
+        table = inst.options.get("network") or {}
+        if not isinstance(table, dict):
+            c.problems.append(f"{inst.at('network')} = {table!r}: expected a table of network parameters")
+            table = {}
+        from ..component import build_params
+
+        try:
+            params = build_params(net.NetworkParams, dict(table), f"{inst.at('network')}")
+        except Exception as exc:  # ConfigError listing every bad key
+            c.problems.extend(str(exc).splitlines())
+            params = net.NetworkParams()
+        inst.network = params
+        pn = c.param(inst, net.pack(params), suffix="_net")
+        xn = c.state(inst, np.zeros(1), suffix="_net")  # the supply pressure: the next solve's start
+        sol = c.float_array(net.N_SOL)
+        mod = c.module(net.__name__)
+        first, second = gens
+        m_b, T_b = c.kinds[first.kind].emit_generator(c, first, T_rh, "0.0")
+        m_pump = c.kinds[second.kind].emit_pump_request(c, second, T_rh)
+        forced = c.var("m_forced")
+        c.emit("hydraulics",
+               f"{forced} = 0.0",
+               f"if {pn}[{net.ENABLED}] > 0.5:",
+               f"    {mod}.solve({pn}, {m_b}, {m_dem}, False, 0.0, 0.0, {xn}[0], {sol})",
+               f"    {forced} = max(0.0, {sol}[{net.X_M_CHP}])")
+        m_c, T_c = c.kinds[second.kind].emit_generator(c, second, T_rh, forced, m_pump=m_pump)
+        c.emit("hydraulics",
+               f"if {pn}[{net.ENABLED}] > 0.5:",
+               f"    if {m_c} != {sol}[{net.X_M_CHP}]:",
+               f"        {mod}.solve({pn}, {m_b}, {m_dem}, True, {m_c}, 0.0, {sol}[{net.X_PS}], {sol})",
+               f"    {xn}[0] = {sol}[{net.X_PS}]")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('p_supply', 'Pa', 'supply header pressure over the return header')} = {xn}[0]",
+               f"{sig('m_flow_forced', 'kg/s', 'flow the header pressure forces through the second generator')} = {forced}",
+               f"{sig('residual', 'kg/s', 'mass balance residual of the network solve')} = "
+               f"{sol}[{net.X_RES}] if {pn}[{net.ENABLED}] > 0.5 else 0.0")
+        return [(m_b, T_b), (m_c, T_c)]
+
+
+from numba import njit  # noqa: E402  (the kernel below is the point's own)
+
+
+@njit(cache=True)
+def inlet(in_layer, in_m, in_T, mix_layers, n_layers, downward, port, m, T):
+    """Spread an inflow over its port layer and mix_layers further layers into the tank (an
+    inlet plume; the last one with the fractional weight), downward from the top port or upward
+    from the bottom port; in_layer has 1 + ceil(mix_layers) entries. mix_layers = 0: all of it
+    enters the port layer (bit-identical to a plain port)."""
+    n = in_layer.shape[0]
+    w_last = mix_layers - (n - 2) if n > 1 else 1.0
+    total = (n - 1) + w_last
+    for i in range(n):
+        in_layer[i] = min(port + i, n_layers - 1) if downward else max(port - i, 0)
+        in_T[i] = T
+        in_m[i] = m * (w_last if i == n - 1 else 1.0) / total

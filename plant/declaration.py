@@ -1,0 +1,291 @@
+"""House declarations: read a house file into named instances of kinds, check every link, report
+every problem at once (file:line, key, the bad value, the closest valid names).
+
+A house file has [house], [profiles] and one table per instance:
+
+    [boiler]
+    kind = "boiler"            # a kind of plant/kinds.py
+    P_nom = 14000.0            # its parameters (the kind's Params) ...
+    [switch]
+    kind = "coupling_point"
+    generators = ["boiler"]    # ... and its links (the kind's LINKS): instances, heights, tables
+
+Overrides {"section.key": value} (or "section.table.key" inside an inline table) replace file
+values before the checks, e.g. {"storage.UA_loss": 25.0, "switch.idle_flow.chp": 0.2}.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, fields
+from difflib import get_close_matches
+from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from .compiler import Instance
+from .component import REQUIRED, build_params
+from .errors import ConfigError
+
+HOUSES = Path(__file__).parent / "houses"
+HOUSE_KEYS = ("name", "description", "start", "base")
+PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday")
+# link keys that name other instances, and the role the named instance must have
+PUMP_HINT = {"emitter": "put a mixing station between it and the coupling point",
+             "storage": "connect a storage through the point's storage key or a coil"}
+
+
+@dataclass
+class Declaration:
+    name: str
+    path: Path
+    description: str
+    start: str
+    household_kwh_per_year: float
+    dhw_litres_per_day: float
+    typeday: int
+    instances: dict
+    problems: list
+    prof: tuple = ()
+
+
+def resolve(name_or_path: str | Path) -> Path:
+    p = Path(name_or_path)
+    if p.suffix == ".toml" or p.exists():
+        if not p.exists():
+            raise ConfigError(f"{p}: no such house file")
+        return p
+    candidate = HOUSES / f"{name_or_path}.toml"
+    if not candidate.exists():
+        known = sorted(f.stem for f in HOUSES.glob("*.toml"))
+        raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)}")
+    return candidate
+
+
+def line_of(text: str, section: str, key: str | None = None) -> int:
+    """Line number of [section] (or of key inside it) in the TOML text; 0 when not found."""
+    lines = text.splitlines()
+    start = None
+    for i, line in enumerate(lines, 1):
+        if re.match(rf"^\s*\[{re.escape(section)}\]\s*(#.*)?$", line):
+            start = i
+            if key is None:
+                return i
+            continue
+        if start is not None:
+            if re.match(r"^\s*\[", line):
+                break
+            if re.match(rf"^\s*([\"']?){re.escape(key)}\1\s*=", line):
+                return i
+    return start or 0
+
+
+def _hint(bad: str, names, what: str) -> str:
+    close = get_close_matches(str(bad), list(names), n=3, cutoff=0.5)
+    return f"did you mean {', '.join(close)}?" if close else f"{what}: {', '.join(sorted(names))}"
+
+
+def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> Declaration:
+    from .kinds import KINDS
+
+    problems: list[str] = []
+    for dotted, value in (overrides or {}).items():
+        parts = dotted.split(".")
+        if len(parts) < 2 or not isinstance(doc.get(parts[0], {}), dict):
+            problems.append(f"override {dotted!r}: expected 'instance.key', e.g. 'storage.UA_loss'")
+            continue
+        target = doc.setdefault(parts[0], {})
+        for part in parts[1:-1]:
+            target = target.setdefault(part, {})
+        target[parts[-1]] = value
+    house = doc.get("house", {})
+    for key in house:
+        if key not in HOUSE_KEYS:
+            problems.append(f"{path}:{line_of(text, 'house', key)} [house] {key}: unknown; "
+                            + _hint(key, HOUSE_KEYS, "allowed"))
+    if "name" not in house:
+        problems.append(f"{path}:{line_of(text, 'house')} [house] name: missing; add name = \"{path.stem}\"")
+    prof = doc.get("profiles", {})
+    for key in prof:
+        if key not in PROFILE_KEYS:
+            problems.append(f"{path}:{line_of(text, 'profiles', key)} [profiles] {key}: unknown; "
+                            + _hint(key, PROFILE_KEYS, "allowed"))
+    typeday = prof.get("typeday", 0)
+    if isinstance(typeday, bool) or not isinstance(typeday, int) or not 0 <= typeday <= 11:
+        problems.append(f"{path}:{line_of(text, 'profiles', 'typeday')} [profiles] typeday = {typeday!r}: "
+                        "must be 0 (year 2021 series) or a type-day block 1 … 11")
+        typeday = 0
+    kwh = prof.get("household_kwh_per_year", 6500.0)
+    litres = prof.get("dhw_litres_per_day", 300.0)
+    for key, v, hi in (("household_kwh_per_year", kwh, 1e6), ("dhw_litres_per_day", litres, 1e5)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= hi:
+            problems.append(f"{path}:{line_of(text, 'profiles', key)} [profiles] {key} = {v!r}: "
+                            f"must be a number 0 … {hi:g}")
+    instances: dict[str, Instance] = {}
+    for order, (name, table) in enumerate(doc.items()):
+        if name in ("house", "profiles"):
+            continue
+        where = f"{path}:{line_of(text, name)} [{name}]"
+        if not isinstance(table, dict):
+            problems.append(f"{path}:{line_of(text, name)} {name}: must be a table [{name}] with a kind")
+            continue
+        kind = table.get("kind")
+        if kind is None:
+            problems.append(f"{where} kind: missing; add kind = \"...\" ("
+                            + _hint(name, KINDS, "known kinds") + ")")
+            continue
+        if kind not in KINDS or kind == "profiles":
+            problems.append(f"{path}:{line_of(text, name, 'kind')} [{name}] kind = {kind!r}: unknown; "
+                            + _hint(kind, [k for k in KINDS if k != "profiles"], "known kinds"))
+            continue
+        k = KINDS[kind]
+        links = dict(k.LINKS)
+        pnames = [f.name for f in fields(k.Params)] if k.Params else []
+        values, options = {}, {}
+        for key, v in table.items():
+            if key == "kind":
+                continue
+            if key in links:
+                options[key] = v
+            elif key in pnames:
+                values[key] = v
+            else:
+                problems.append(f"{path}:{line_of(text, name, key)} [{name}] {key}: not a parameter or link "
+                                f"of a {kind}; " + _hint(key, pnames + list(links), "allowed"))
+        for key, (default, meaning) in links.items():
+            if key not in options:
+                if default is REQUIRED:
+                    problems.append(f"{where} {key}: missing; a {kind} needs it ({meaning})")
+                    options[key] = None
+                else:
+                    options[key] = default
+        params = None
+        if k.Params is not None:
+            try:
+                params = build_params(k.Params, values, f"[{name}]")
+            except ConfigError as exc:
+                for msg in str(exc).splitlines():
+                    key = msg.split("] ", 1)[1].split(" ", 1)[0] if "] " in msg else None
+                    problems.append(f"{path}:{line_of(text, name, key)} {msg}")
+        instances[name] = Instance(name, kind, params, options, where, order,
+                                   {key: line_of(text, name, key) for key in table})
+    _check_links(instances, path, text, problems)
+    decl = Declaration(name=house.get("name", path.stem), path=path,
+                       description=str(house.get("description", "")),
+                       start=str(house.get("start", "2021-01-01")),
+                       household_kwh_per_year=float(kwh) if isinstance(kwh, (int, float)) else 0.0,
+                       dhw_litres_per_day=float(litres) if isinstance(litres, (int, float)) else 0.0,
+                       typeday=typeday, instances=instances, problems=problems)
+    return decl
+
+
+def _check_links(instances: dict, path: Path, text: str, problems: list) -> None:
+    """Every instance link names an instance of the right role, no port is used twice, every
+    generator and pumped consumer sits on a coupling point."""
+    from .kinds import KINDS
+
+    used: dict[tuple[str, str], str] = {}
+    for inst in list(instances.values()):
+        for key, role in KINDS[inst.kind].REFS.items():
+            if key not in inst.options or inst.options[key] is None:
+                continue
+            v = inst.options[key]
+            names = v if isinstance(v, list) else [v]
+            if not all(isinstance(n, str) for n in names):
+                problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {v!r}: "
+                                "expected instance name(s) (strings)")
+                inst.options[key] = None
+                continue
+            bad = False
+            keep = []
+            for n in names:
+                loc = f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {n!r}"
+                if n not in instances:
+                    problems.append(f"{loc}: no such instance; " + _hint(n, instances, "declared"))
+                    bad = True
+                    continue
+                other = KINDS[instances[n].kind]
+                if other.role != role:
+                    hint = PUMP_HINT.get(other.role, f"a {role} is needed here")
+                    if key == "consumers":
+                        hint = f"a {instances[n].kind} has no pump of its own: " + PUMP_HINT.get(other.role, hint)
+                    problems.append(f"{loc}: a {instances[n].kind} ({other.role}) cannot be used as {key}; {hint}")
+                    bad = True
+                    continue
+                if role in ("generator", "consumer", "emitter"):
+                    if (n, role) in used:
+                        problems.append(f"{loc}: port connected twice (also by [{used[(n, role)]}])")
+                        continue
+                    used[(n, role)] = inst.name
+                keep.append(n)
+            if isinstance(v, list):
+                inst.options[key] = keep  # the good names stay, so one bad name hides no other problem
+            elif bad:
+                inst.options[key] = None
+        if inst.kind == "coupling_point":
+            if not inst.options.get("generators"):
+                problems.append(f"{inst.where} generators: a coupling point needs at least one generator "
+                                "(a loop with no pump)")
+                inst.options["generators"] = None
+            gens = inst.options.get("generators") or []
+            for key in ("idle_flow", "pump_coupling"):
+                table = inst.options.get(key)
+                if not isinstance(table, dict):
+                    problems.append(f"{inst.where} {key} = {table!r}: expected {{ generator = share }}")
+                    inst.options[key] = {}
+                    continue
+                for g, share in table.items():
+                    if g not in gens:
+                        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key}.{g}: not a "
+                                        "generator of this point; " + _hint(g, gens, "its generators"))
+                    elif isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
+                        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key}.{g} = "
+                                        f"{share!r}: must be a share 0 … 1")
+            if inst.options.get("hydraulics") not in ("prescribed", "pressure_driven"):
+                problems.append(f"{path}:{line_of(text, inst.name, 'hydraulics')} [{inst.name}] hydraulics = "
+                                f"{inst.options.get('hydraulics')!r}: unknown; allowed: prescribed, pressure_driven")
+    for inst in instances.values():
+        role = KINDS[inst.kind].role
+        if role in ("generator", "consumer") and (inst.name, role) not in used:
+            problems.append(f"{inst.where}: a {inst.kind} connected to nothing; list it in a coupling "
+                            f"point's {role}s")
+        if role == "emitter" and (inst.name, role) not in used:
+            problems.append(f"{inst.where}: an emitter fed by nothing; name it as a mixing station's emitter")
+
+
+def read(path: Path, _seen: tuple = ()) -> dict:
+    """The file's tables; a file with [house] base = "other" is that house with these tables'
+    keys laid over it (a variant: a finer truth, a cut, another generator)."""
+    try:
+        doc = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
+    base = doc.get("house", {}).get("base") if isinstance(doc.get("house"), dict) else None
+    if base is None:
+        return doc
+    base_path = resolve(base) if not str(base).endswith(".toml") else path.parent / base
+    if base_path.resolve() in _seen or base_path.resolve() == path.resolve():
+        raise ConfigError(f"{path}: [house] base = {base!r}: a house cannot be its own base")
+    merged = read(base_path, _seen + (path.resolve(),))
+    for name in doc["house"].get("remove", []):
+        if name not in merged or name in ("house", "profiles"):
+            raise ConfigError(f"{path}: [house] remove = {name!r}: the base {base!r} declares no such "
+                              "instance; " + _hint(name, [k for k in merged if k not in ("house", "profiles")],
+                                                   "its instances"))
+        del merged[name]
+    for name, table in doc.items():
+        if isinstance(table, dict) and isinstance(merged.get(name), dict):
+            merged[name] = {**merged[name], **table}
+        else:
+            merged[name] = table
+    merged["house"].pop("base", None)
+    merged["house"].pop("remove", None)
+    return merged
+
+
+def load(name_or_path: str | Path, overrides: dict | None = None) -> Declaration:
+    path = resolve(name_or_path)
+    return parse(read(path), path, path.read_text(), overrides)
+

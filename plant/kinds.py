@@ -1,0 +1,14 @@
+"""The registry of component and connection kinds a house file may name (`kind = "..."`)."""
+from __future__ import annotations
+
+from . import boundary
+from .components import boiler, chp, dhw, heat_pump, mixing_station, pipe, radiator, storage_kind, zone
+from .connections import branch, coil, coupling_point
+from .controllers import room_thermostat, rule_based
+from .fmu import storage_kind as storage_fmu
+
+KINDS = {k.name: k for k in (
+    boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
+    mixing_station.Kind(), pipe.Kind(), dhw.Kind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
+    rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),
+)}

@@ -1,0 +1,53 @@
+"""Time splitting shared by every plant: internal steps of at most H_MAX, and the span plan that
+replays a command table (midpoint switches, cuts at whole minutes)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+H_MAX = 5.0  # s, largest internal step (header volume 10 l, flows up to ~1 kg/s)
+
+
+@njit(cache=True)
+def n_steps(dt):
+    """Internal steps for a span of dt seconds: equal steps of at most H_MAX."""
+    return max(1, int(math.ceil(dt / H_MAX - 1e-9)))
+
+
+@njit(cache=True)
+def _plan_span(plan, k, a, b, row, rec):
+    """Append the span a..b (commands of `row`, sample `rec` recorded at its end, -1: none),
+    cut at the last whole minute inside: the profiles (DHW draws, electricity) change on minutes
+    and a step samples them at its start."""
+    m = math.floor(b / 60.0) * 60.0
+    if a + 1e-6 < m < b - 1e-6:
+        plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, m, row, -1
+        k += 1
+        a = m
+    plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, b, row, rec
+    return k + 1
+
+
+@njit(cache=True)
+def drive_plan(times, cmd):
+    """The spans [t0, t1, command row, recorded sample or -1] that replay a command table from
+    t = 0: row i holds from sample i to i + 1, a change is applied at the midpoint (the samples
+    cannot tell when it happened). One plan for the compiled and the Python-stepped drive."""
+    n = times.shape[0]
+    plan = np.empty((4 * n, 4))
+    k = _plan_span(plan, 0, 0.0, times[0], 0, 0)
+    for i in range(1, n):
+        t0, t1 = times[i - 1], times[i]
+        same = True
+        for j in range(cmd.shape[1]):
+            if cmd[i - 1, j] != cmd[i, j]:
+                same = False
+        if same:
+            k = _plan_span(plan, k, t0, t1, i, i)
+        else:
+            tm = 0.5 * (t0 + t1)
+            k = _plan_span(plan, k, t0, tm, i - 1, -1)
+            k = _plan_span(plan, k, tm, t1, i, i)
+    return plan[:k]
