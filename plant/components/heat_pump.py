@@ -23,7 +23,11 @@ Conventions and choices
   rise, which differs from the balance when T_in + dT < T_out_min; the floor is kept for the
   table lookup only.)
 * BWS-1-10: heat taken from the brine Q_src = P_heat + P_el = compressor heat − compressor power
-  (accumulated in state E_src); the brine side model (ground collector) is not part of this unit.
+  (accumulated in state E_src). Its brine comes from a ground collector
+  (plant/components/ground_collector.py, linked as `collector`), which delivers exactly Q_src and
+  sets the brine temperatures; the ledger books Q_src as "fuel" (energy into the system), the
+  electric power as "el" and the heat into the water as "heat". As an on/off machine its kind
+  (`heat_pump_brine`) has no modulation input; its `y` is 1 while heating.
 * The start delay is applied to every start (upstream skips it for a start at t = 0).
   Cooling mode is not implemented (irrelevant for the houses' heating use; upstream's cooling
   tables are all ones).
@@ -244,23 +248,69 @@ class AirKind(ComponentKind):
         mod = c.module(__name__)
         c.emit("hydraulics", f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_air(t, h, {x}, {p}, {tabs}, "
                              f"{on}, {y_set}, {aux}, {c.values['weather.T_air']}, {m_ext}, {T_in})")
+        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"{x}[{X_Y}]",
+                      f"({Ph} + {Pel}) * h if {mode} == 3.0 else 0.0")
+        return m, T
+
+
+def _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, y, fuel):
+    """The output signals both models share, and their ledger: `fuel` is the energy into the
+    system this step (the heat the compressor lifts from the air or the brine)."""
+    sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+    c.emit("signals",
+           f"{sig('T_sup', 'degC', 'heat pump supply temperature')} = {T} if {m} > 0.0 else {T_in}",
+           f"{sig('T_ret', 'degC', 'heat pump return temperature')} = {T_in}",
+           f"{sig('m_flow', 'kg/s', 'water flow through the heat pump')} = {m}",
+           f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
+           f"{sig('P_el', 'W', 'electric power (- consumed: compressor and back-up heater)')} = {Pel}",
+           f"{sig('COP', '1', 'heat over electric power while heating (0 otherwise)')} = "
+           f"{Ph} / -{Pel} if {mode} == 3.0 and {Pel} < 0.0 else 0.0",
+           f"{sig('y', '1', 'effective modulation')} = {y}",
+           f"{sig('mode', '1', '0 off, 1 start delay, 3 heating, 5 blocked, 7 defrost')} = {mode}",
+           f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
+           f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
+           f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X_EEL}]",
+           f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
+           f"{c.ledger_entry(inst, 'fuel')} += {fuel}",
+           f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
+           f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
+
+
+class BrineKind(ComponentKind):
+    """The BWS-1-10 as a generator on a coupling point or branch (inputs on, aux; an on/off
+    machine, so no modulation request), its brine from a ground collector (link `collector`,
+    plant/components/ground_collector.py) that delivers exactly the source heat it takes."""
+
+    name = "heat_pump_brine"
+    Params = ParamsBrine
+    role = "generator"
+    REFS = {"collector": "source"}
+    LINKS = {"collector": (REQUIRED, "the ground collector its brine comes from")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        coll = c.instances[inst.options["collector"]]
+        coll_kind = c.kinds[coll.kind]
+        T_src = coll_kind.source_temperature(c, coll)
+        m, T, Pel, Ph, mode, Q_src = (c.var(v) for v in ("m", "T", "P_el", "P_heat", "mode", "Q_src"))
+        tabs = ", ".join(c.table(a) for a in tables_brine())
+        on = c.signal(inst, "on", "1", "input", "heat pump run command (0/1)")
+        aux = c.signal(inst, "aux", "1", "input", "back-up heater request: 0, <= 1/3 (2 kW), <= 2/3 (4 kW), > 2/3 (6 kW)")
+        mod = c.module(__name__)
+        c.emit("hydraulics",
+               f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_brine(t, h, {x}, {p}, {tabs}, {on}, {aux}, "
+               f"{T_src}, {m_ext}, {T_in})",
+               f"{Q_src} = {Ph} + {Pel} if {mode} == 3.0 else 0.0")
+        coll_kind.attach(c, coll, inst, Q_src, f"{x}[{X_RUN}]")
+        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"1.0 if {mode} == 3.0 else 0.0", f"{Q_src} * h")
+        T_brine_in, T_brine_out = coll_kind.brine_temperatures(c, coll)
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('T_sup', 'degC', 'heat pump supply temperature')} = {T} if {m} > 0.0 else {T_in}",
-               f"{sig('T_ret', 'degC', 'heat pump return temperature')} = {T_in}",
-               f"{sig('m_flow', 'kg/s', 'water flow through the heat pump')} = {m}",
-               f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
-               f"{sig('P_el', 'W', 'electric power (- consumed: compressor and back-up heater)')} = {Pel}",
-               f"{sig('COP', '1', 'heat over electric power while heating (0 otherwise)')} = "
-               f"{Ph} / -{Pel} if {mode} == 3.0 and {Pel} < 0.0 else 0.0",
-               f"{sig('y', '1', 'effective modulation')} = {x}[{X_Y}]",
-               f"{sig('mode', '1', '0 off, 1 start delay, 3 heating, 5 blocked, 7 defrost')} = {mode}",
-               f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
-               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
-               f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X_EEL}]",
-               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
-               # energy in: the ambient heat the compressor lifts (heat + electric power, heating only)
-               f"{c.ledger_entry(inst, 'fuel')} += ({Ph} + {Pel}) * h if {mode} == 3.0 else 0.0",
-               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
-               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
+               f"{sig('T_brine_in', 'degC', 'brine entering the heat pump (from the collector)')} = {T_brine_in}",
+               f"{sig('T_brine_out', 'degC', 'brine leaving the heat pump (to the collector)')} = {T_brine_out}",
+               f"{sig('Q_flow_source', 'W', 'heat taken from the brine (compressor heat - compressor power)')} = {Q_src}",
+               f"{sig('E_source', 'J', 'heat taken from the brine since the start')} = {x}[{X_ESRC}]")
         return m, T
