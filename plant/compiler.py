@@ -268,22 +268,23 @@ def source(c: Context, catalogue: SignalCatalogue) -> str:
 import math
 import numpy as np
 from numba import njit, objmode  # noqa: F401 (FMU kinds call out of the step)
-from plant.schedule import drive_plan, n_steps
+from plant.schedule import apply_bindings, drive_plan, n_steps
 from plant.water import CP, RHO
 {imports}
 
 
 @njit(cache=True)
-def step(t, h, x, p, s, remote, ledger, tabs, prof, ia, fa):
+def step(t, h, x, p, s, remote, ledger, tabs, prof, ia, fa, bind):
+    apply_bindings(t, h, bind, s)
 {chr(10).join(body)}
 
 
 @njit(cache=True)
-def run(n, h, t0, x, p, s, remote, ledger, tabs, prof, ia, fa, out, rec_every):
+def run(n, h, t0, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, out, rec_every):
     rows = 0
     for k in range(n):
         t = t0 + k * h
-        step(t, h, x, p, s, remote, ledger, tabs, prof, ia, fa)
+        step(t, h, x, p, s, remote, ledger, tabs, prof, ia, fa, bind)
         if rec_every > 0 and (k + 1) % rec_every == 0 and rows < out.shape[0]:
             out[rows, 0] = t + h
             out[rows, 1:] = s
@@ -292,15 +293,17 @@ def run(n, h, t0, x, p, s, remote, ledger, tabs, prof, ia, fa, out, rec_every):
 
 
 @njit(cache=True)
-def drive(times, cmd, idx, x, p, s, remote, ledger, tabs, prof, ia, fa, out):
+def drive(times, cmd, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, out):
+    """Run to times[-1] through the spans of drive_plan (the bound commands switch at the
+    spans' midpoints); out[i] = the signals at times[i]."""
     no_out = np.zeros((0, s.shape[0] + 1))
     for seg in drive_plan(times, cmd):
-        a, b, row, rec = seg[0], seg[1], int(seg[2]), int(seg[3])
-        for j in range(idx.shape[0]):
-            s[idx[j]] = cmd[row, j]
+        a, b, rec = seg[0], seg[1], int(seg[3])
         if b > a:
             n = n_steps(b - a)
-            run(n, (b - a) / n, a, x, p, s, remote, ledger, tabs, prof, ia, fa, no_out, 0)
+            run(n, (b - a) / n, a, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, no_out, 0)
+        else:
+            apply_bindings(a, 0.0, bind, s)
         if rec >= 0:
             out[rec] = s
 '''

@@ -111,6 +111,7 @@ class House:
         self._s = np.zeros(len(self.catalogue))
         self._remote = np.zeros(len(self.catalogue), dtype=np.bool_)
         self._ledger = np.zeros(len(P.ledger))
+        self.unbind()
         self._start_runtimes()
         if self._controller == "external":
             for name in self._supervised:
@@ -197,15 +198,57 @@ class House:
     # --- time ------------------------------------------------------------------------------
     def _args(self):
         P = self._plant
-        return (self._x, P.p, self._s, self._remote, self._ledger, P.tabs, P.prof, self._ia, self._fa)
+        return (self._x, P.p, self._s, self._remote, self._ledger, P.tabs, P.prof, self._ia, self._fa,
+                self._bind)
 
     def _advance(self, dt: float, n: int, out=None, rec_every: int = 0) -> int:
         h = dt / n
         out = out if out is not None else np.zeros((0, len(self.catalogue) + 1))
-        x, p, s, remote, ledger, tabs, prof, ia, fa = self._args()
-        rows = self._plant.module.run(n, h, self.t, x, p, s, remote, ledger, tabs, prof, ia, fa, out, rec_every)
+        rows = self._plant.module.run(n, h, self.t, *self._args(), out, rec_every)
         self.t += dt
         return rows
+
+    # --- bindings: inputs that follow a time series ------------------------------------------
+    def bind(self, names: list[str], times, values, interpolation: str = "linear") -> None:
+        """Inputs `names` follow the columns of `values` [len(times), len(names)] over `times`
+        [s since start]: the one way anything outside drives an input over time (replay of
+        commands, measured boundaries of a cut, FMU inputs). "linear" interpolates at each step's
+        midpoint, "hold" keeps a sample until the next. Bound inputs are remote (the house's own
+        controllers leave them alone); replaces earlier bindings of the same inputs."""
+        if interpolation not in ("linear", "hold"):
+            raise ValueError(f"bind: interpolation = {interpolation!r}; allowed: linear, hold")
+        idx = []
+        for n in names:
+            sig = self.catalogue.signal(n)
+            sig.require_input()
+            idx.append(sig.index)
+        times = np.ascontiguousarray(times, dtype=np.float64)
+        values = np.ascontiguousarray(values, dtype=np.float64).reshape(len(times), len(idx))
+        if len(times) == 0 or not np.all(np.diff(times) > 0):
+            raise ValueError("bind: times must be increasing, at least one sample")
+        bt, bv, bidx, bmode = self._bind
+        keep = [j for j, i in enumerate(bidx) if i not in idx]
+        mode = 1 if interpolation == "linear" else 0
+        if keep and not np.array_equal(bt, times):  # one time grid: bring the kept ones onto it
+            bv_old = np.column_stack([np.interp(times, bt, bv[:, j]) if bmode[j] else
+                                      bv[np.clip(np.searchsorted(bt, times, "right") - 1, 0, len(bt) - 1), j]
+                                      for j in keep])
+        else:
+            bv_old = bv[:, keep] if keep else np.zeros((len(times), 0))
+        self._bind = (times, np.ascontiguousarray(np.column_stack([bv_old, values])),
+                      np.array([bidx[j] for j in keep] + idx, dtype=np.int64),
+                      np.array([bmode[j] for j in keep] + [mode] * len(idx), dtype=np.int64))
+        self._remote[idx] = True
+
+    def unbind(self, names: list[str] | None = None) -> None:
+        """Stop following the series of `names` (all when None); they keep their last value."""
+        if names is None or not hasattr(self, "_bind"):
+            self._bind = (np.zeros(1), np.zeros((1, 0)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+            return
+        drop = {self.catalogue.index(n) for n in names}
+        bt, bv, bidx, bmode = self._bind
+        keep = [j for j, i in enumerate(bidx) if i not in drop]
+        self._bind = (bt, np.ascontiguousarray(bv[:, keep]), bidx[keep], bmode[keep])
 
     def advance(self, t: float) -> None:
         """Advance to time t [s since start] (the Plant protocol's clock-driven form of step)."""
@@ -217,17 +260,15 @@ class House:
         times[i + 1] (a change is applied at the midpoint); returns the signals at `times`
         [len(times), signals]. Spans are cut at whole minutes and split into steps of at most
         5 s. The inputs are set remote (the house's own controller no longer writes them)."""
-        for n in names:
-            self.catalogue.signal(n).require_input()
-        idx = np.array([self.catalogue.index(n) for n in names], dtype=np.int64)
         times = np.ascontiguousarray(times, dtype=np.float64)
-        cmd = np.ascontiguousarray(cmd, dtype=np.float64).reshape(len(times), len(idx))
+        cmd = np.ascontiguousarray(cmd, dtype=np.float64).reshape(len(times), len(names))
         if self.t != 0.0 or not np.all(np.diff(times) > 0) or times[0] < 0:
             raise ValueError("drive: starts at t = 0 with increasing sample times >= 0")
-        self._remote[idx] = True
+        # the commands are bound, held from the midpoint between two samples (when they changed)
+        switch = np.concatenate([[min(0.0, times[0])], 0.5 * (times[:-1] + times[1:])])
+        self.bind(names, switch, cmd, interpolation="hold")
         out = np.empty((len(times), len(self.catalogue)))
-        x, p, s, remote, ledger, tabs, prof, ia, fa = self._args()
-        self._plant.module.drive(times, cmd, idx, x, p, s, remote, ledger, tabs, prof, ia, fa, out)
+        self._plant.module.drive(times, cmd, *self._args(), out)
         self.t = float(times[-1])
         return out
 

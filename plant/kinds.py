@@ -3,14 +3,17 @@ from __future__ import annotations
 
 from . import boundary
 from .components import boiler, chp, dhw, heat_pump, mixing_station, pipe, radiator, storage_kind, zone
-from .connections import branch, coil, coupling_point
+from .connections import branch, coil, coupling_point, measured
 from .controllers import room_thermostat, rule_based
 from .fmu import storage_kind as storage_fmu
+from .components import pv, solar_collector
 from .components import floor_heating, ground_collector
 
 KINDS = {k.name: k for k in (
     boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
     mixing_station.Kind(), pipe.Kind(), dhw.Kind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
+    measured.ConsumerKind(), measured.DrawKind(),
     rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),
+    pv.Kind(), solar_collector.Kind(),
     heat_pump.BrineKind(), ground_collector.Kind(), floor_heating.Kind(),
 )}

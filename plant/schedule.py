@@ -51,3 +51,28 @@ def drive_plan(times, cmd):
             k = _plan_span(plan, k, t0, tm, i - 1, -1)
             k = _plan_span(plan, k, tm, t1, i, i)
     return plan[:k]
+
+
+HOLD, LINEAR = 0, 1
+
+
+@njit(cache=True)
+def apply_bindings(t, h, bind, s):
+    """Bound inputs follow their time series: s[idx[j]] = series j at the step (HOLD: the last
+    sample at or before the step's start; LINEAR: interpolated at the step's midpoint). Before
+    the first sample a series holds its first value, after the last its last; NaN keeps the
+    previous value (a gap in a recording)."""
+    bt, bv, idx, mode = bind
+    n = bt.shape[0]
+    for j in range(idx.shape[0]):
+        tt = t + 0.5 * h if mode[j] == LINEAR else t
+        i = np.searchsorted(bt, tt, side="right") - 1
+        if i < 0:
+            v = bv[0, j]
+        elif i >= n - 1 or mode[j] != LINEAR:
+            v = bv[min(i, n - 1), j]
+        else:
+            w = (tt - bt[i]) / (bt[i + 1] - bt[i])
+            v = bv[i, j] * (1.0 - w) + bv[i + 1, j] * w
+        if v == v:
+            s[idx[j]] = v
