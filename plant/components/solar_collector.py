@@ -1,0 +1,265 @@
+"""Solar thermal collector with its solar pump and hysteresis control, delivering through a coil
+in a storage (the lab's solar circuit, reference §12.1).
+
+Physics in words
+----------------
+The collector is one lumped node (absorber, fluid and glass) of heat capacity C = c_eff x area
+at the temperature T_collector, which is also its outlet temperature. It absorbs
+    S = area x eta0 x (K_beam(theta) G_beam + K_diffuse G_diffuse)            [W]
+and loses to the outdoor air (EN ISO 9806 quasi-steady curve)
+    Q_loss = area x (a1 (T_m - T_air) + a2 (T_m - T_air)^2)
+at the mean fluid temperature T_m = (T_in + T_out)/2 while the pump runs (T_m = T_collector
+when it stands still), so in steady state the delivered heat follows the efficiency curve
+eta = eta0 - a1 (T_m - T_air)/G - a2 (T_m - T_air)^2/G exactly. G_beam, G_diffuse come from
+the weather's horizontal beam and diffuse irradiance (plant/sun.py: sun position at the step's
+local standard time, isotropic sky, ground reflection; the collector plane has the given tilt
+and azimuth). The incidence-angle modifier is ASHRAE's K_beam = 1 - b0 (1/cos theta - 1)
+(0 ... 1); diffuse and ground-reflected light take the modifier at 60 deg, K_diffuse = 1 - b0.
+
+The node is advanced exactly over each step (the a2 term linearised about the start of the
+step): inlet at the last return temperature, mean outlet sent to the coil. The coil is a
+storage coil (plant/components/storage.py's exact segment-wise exchanger); its outlet is the
+collector return. When the return comes back at another temperature than assumed, its
+enthalpy difference goes into the node at the step's end, so the ledger closes to round-off:
+    absorbed = heat to the storage + collector losses + change of collector heat.
+Ledger: the irradiance on the aperture is `fuel`, the absorbed heat `heat` (optical losses are
+the difference), thermal losses `loss`; the node's heat C x T_collector is stored energy.
+
+Control (the lab's solar pump, §12.1): the pump switches on when T_collector - T_storage >
+dT_on and off when it falls below dT_off (held in between), T_storage being a storage sensor
+named by the link `sensor`; it stays off while that sensor is above T_storage_max. Flow when
+on: m_flow_max x clamp((T_sup - T_ret - dT_flow_min)/(dT_flow_max - dT_flow_min), 0, 1) with
+the last supply and return (`modulating = true`, the original's rule), else m_flow_max. The
+inputs `on` and `m_flow_set` carry the commands; driven from outside (remote), they override
+the built-in control (the SiL's ST_S_FW_ST_VL_set).
+
+Parameters (SI)
+---------------
+| name | unit | meaning |
+|---|---|---|
+| area | m2 | aperture area (WolfCRK12 1.312 m2; the SiL export uses 2 m2) |
+| eta0, a1, a2 | 1, W/(m2 K), W/(m2 K2) | efficiency curve on the aperture (WolfCRK12: 0.642, 0.885, 0.001) |
+| c_eff | J/(m2 K) | effective heat capacity per aperture area (8416, "GreenCity units" read as J/(m2 K)) |
+| b0 | 1 | incidence-angle modifier coefficient (0: none) |
+| tilt, azimuth | deg | plane tilt from the horizontal, azimuth 180 = south (35 deg, south) |
+| latitude, longitude | deg | site (Munich: 48.14 N, 11.58 E) |
+| albedo | 1 | ground reflectance |
+| m_flow_max | kg/s | solar pump flow at full speed (20 l/min) |
+| dT_on, dT_off | K | pump hysteresis on T_collector - T_storage (3 K, 2 K) |
+| dT_flow_min, dT_flow_max | K | flow modulation on T_sup - T_ret (3 K, 7 K) |
+| modulating | - | flow modulation on (the original) or full flow whenever on |
+| T_storage_max | degC | pump blocked above this storage temperature (no such limit upstream: 95 degC keeps the water below boiling) |
+| UA | W/K | coil conductance (house 1: 1.8 m2 x 675 W/(m2 K) = 1215 W/K) |
+| T_init | degC | initial collector temperature |
+
+Assumptions: no stagnation or boiling model (the node's temperature follows the curve however
+high); no pipe losses or delay between collector and storage; the coil fluid holds no heat
+(as every storage coil here). The collector in §12.1 is a CPC tube collector; the curve model
+is the flat-plate one with its published coefficients (GreenCity's own model is not available,
+reference §0.4).
+
+Data source: reference §12.1 (upstream DZinsmeister/CoSES_thermal_ProHMo, Houses/SF1.mo).
+Validated by tests/plant/test_solar.py (steady-state efficiency curve, daily energy balance,
+pump hysteresis, a June week of house 1 with its collector).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .. import sun
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..water import CP
+
+
+@dataclass(frozen=True)
+class Params:
+    area: float = param(1.312, "m2", "aperture area", 0.1, 1000.0)
+    eta0: float = param(0.642, "1", "optical efficiency (zero-loss efficiency)", 0.0, 1.0)
+    a1: float = param(0.885, "W/(m2 K)", "linear heat-loss coefficient", 0.0, 20.0)
+    a2: float = param(0.001, "W/(m2 K2)", "quadratic heat-loss coefficient", 0.0, 1.0)
+    c_eff: float = param(8416.0, "J/(m2 K)", "effective heat capacity per aperture area", 100.0, 1e6)
+    b0: float = param(0.1, "1", "incidence-angle modifier coefficient K = 1 - b0 (1/cos - 1)", 0.0, 1.0)
+    tilt: float = param(35.0, "deg", "tilt from the horizontal", 0.0, 90.0)
+    azimuth: float = param(180.0, "deg", "azimuth of the plane's normal (90 east, 180 south, 270 west)", 0.0, 360.0)
+    latitude: float = param(48.14, "deg", "site latitude (north positive)", -90.0, 90.0)
+    longitude: float = param(11.58, "deg", "site longitude (east positive; clock is CET = 15 deg E)", -180.0, 180.0)
+    albedo: float = param(0.2, "1", "ground reflectance", 0.0, 1.0)
+    m_flow_max: float = param(0.333, "kg/s", "solar pump flow at full speed", 0.0, 10.0)
+    dT_on: float = param(3.0, "K", "pump on above T_collector - T_storage", -10.0, 50.0)
+    dT_off: float = param(2.0, "K", "pump off below T_collector - T_storage", -10.0, 50.0)
+    dT_flow_min: float = param(3.0, "K", "no flow at or below this supply - return difference", 0.0, 50.0)
+    dT_flow_max: float = param(7.0, "K", "full flow at or above this supply - return difference", 0.0, 50.0)
+    modulating: bool = param(True, "1", "flow modulation on the supply - return difference (else full flow when on)")
+    T_storage_max: float = param(95.0, "degC", "pump blocked above this storage temperature", 20.0, 100.0)
+    UA: float = param(1215.0, "W/K", "conductance of the coil in the storage", 0.0, 1e6)
+    T_init: float = param(20.0, "degC", "initial collector temperature", -30.0, 100.0)
+
+
+(AREA, ETA0, A1, A2, C_EFF, B0, TILT, AZIMUTH, LATITUDE, LONGITUDE, ALBEDO, M_FLOW_MAX, DT_ON, DT_OFF,
+ DT_FLOW_MIN, DT_FLOW_MAX, MODULATING, T_STORAGE_MAX, UA, T_INIT) = range(20)
+N_PARAMS = 20
+
+STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
+X_T, X_TRET, X_TSUP, X_EHEAT, X_ESOLAR = range(5)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    return np.array([params.T_init, params.T_init, params.T_init, 0.0, 0.0], dtype=np.float64)
+
+
+@njit(cache=True)
+def absorbed(p, beam, diffuse, cos_theta):
+    """Heat the absorber takes from the plane irradiance [W] (optical efficiency and incidence
+    modifier applied)."""
+    k_beam = 0.0
+    if cos_theta > 0.0:
+        k_beam = min(1.0, max(0.0, 1.0 - p[B0] * (1.0 / cos_theta - 1.0)))
+    k_diffuse = max(0.0, 1.0 - p[B0])
+    return p[AREA] * p[ETA0] * (k_beam * beam + k_diffuse * diffuse)
+
+
+@njit(cache=True)
+def control(x, p, on, T_storage):
+    """Pump command (hysteresis on T_collector - T_storage, held between dT_off and dT_on) and
+    flow request; returns (on, m_flow_set)."""
+    dT = x[X_T] - T_storage
+    if T_storage > p[T_STORAGE_MAX]:
+        on = 0.0
+    elif dT > p[DT_ON]:
+        on = 1.0
+    elif dT < p[DT_OFF]:
+        on = 0.0
+    m = p[M_FLOW_MAX]
+    if p[MODULATING] > 0.5:
+        span = p[DT_FLOW_MAX] - p[DT_FLOW_MIN]
+        d = x[X_T] - x[X_TRET] - p[DT_FLOW_MIN]
+        y = (1.0 if d > 0.0 else 0.0) if span <= 0.0 else min(1.0, max(0.0, d / span))
+        m = p[M_FLOW_MAX] * y
+    return on, m
+
+
+@njit(cache=True)
+def advance(h, x, p, S, T_air, m):
+    """Advance the collector node over h with the inlet at the last return temperature x[T_ret]
+    (exact solution of the node's linear equation, a2 linearised about the step start).
+
+    Returns (T_sup, Q_loss): the mean outlet temperature over the step and the mean thermal loss
+    [W], the latter from the node's exact energy balance
+        C (T_end - T_start) = h (S - Q_loss - m cp (T_sup - T_in))."""
+    C = p[C_EFF] * p[AREA]
+    T0 = x[X_T]
+    if m > 0.0:
+        T_in, w = x[X_TRET], 0.5
+    else:
+        T_in, w = T0, 0.0
+    Tm0 = w * T_in + (1.0 - w) * T0
+    k = p[AREA] * (p[A1] + p[A2] * abs(Tm0 - T_air))
+    # C dT/dt = alpha - beta T
+    beta = k * (1.0 - w) + m * CP
+    alpha = S - k * (w * T_in - T_air) + m * CP * T_in
+    r = beta * h / C
+    if r > 1e-12:
+        T_inf = alpha / beta
+        T1 = T_inf + (T0 - T_inf) * math.exp(-r)
+        T_mean = T_inf + (T0 - T_inf) * (-math.expm1(-r) / r)
+    else:
+        T1 = T0 + alpha * h / C
+        T_mean = 0.5 * (T0 + T1)
+    x[X_T] = T1
+    Q_loss = S - m * CP * (T_mean - T_in) - C * (T1 - T0) / h if h > 0.0 else 0.0
+    x[X_TSUP] = T_mean if m > 0.0 else T1
+    return T_mean, Q_loss
+
+
+@njit(cache=True)
+def settle(h, x, p, m, T_ret, T_storage):
+    """The return came back from the coil at T_ret instead of the assumed inlet: its enthalpy
+    difference goes into the node. Without flow the return follows the storage sensor (what the
+    flow modulation compares with at the next start)."""
+    if m > 0.0:
+        x[X_T] += m * CP * h * (T_ret - x[X_TRET]) / (p[C_EFF] * p[AREA])
+        x[X_TRET] = T_ret
+    else:
+        x[X_TRET] = T_storage
+
+
+class Kind(ComponentKind):
+    """The collector, its pump and control, and its coil in a storage; emits itself."""
+
+    name = "solar_collector"
+    Params = Params
+    role = "connection"
+    REFS = {"storage": "storage"}
+    LINKS = {"storage": (REQUIRED, "the storage the solar coil is in"),
+             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom]"),
+             "bottom": (REQUIRED, "height of the coil outlet [m]"),
+             "sensor": (REQUIRED, "the storage temperature the pump control compares with "
+                                  "(a signal, e.g. \"dhw_storage.T_sensor_5\")")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def stored_energy(self, inst, x):
+        return inst.params.c_eff * inst.params.area * float(x[X_T])
+
+    def emit(self, c, inst):
+        o = inst.options
+        st = o["storage"]
+        top, bottom = c.port_layer(inst, "top", st), c.port_layer(inst, "bottom", st)
+        if isinstance(o["top"], (int, float)) and isinstance(o["bottom"], (int, float)) and o["top"] < o["bottom"]:
+            c.problems.append(f"{inst.at('top')} = {o['top']}: must be above bottom = {o['bottom']}")
+        if not isinstance(o["sensor"], str):
+            c.problems.append(f"{inst.at('sensor')} = {o['sensor']!r}: must name a signal, e.g. "
+                              f"\"{st}.T_sensor_5\"")
+        if inst.params.dT_off > inst.params.dT_on:
+            c.problems.append(f"{inst.at('dT_off')} = {inst.params.dT_off}: must not exceed dT_on = "
+                              f"{inst.params.dT_on} K")
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
+        k = c.storage_ports(st).add_coil(inst, top, bottom)
+        T_st = c.s(o["sensor"]) if isinstance(o["sensor"], str) else "0.0"
+        on = c.signal(inst, "on", "1", "input", "solar pump command (0/1); the built-in hysteresis "
+                                                "writes it unless driven from outside")
+        m_set = c.signal(inst, "m_flow_set", "kg/s", "input", "solar pump flow when on; the built-in "
+                                                             "modulation writes it unless driven from outside")
+        mod, smod = c.module(__name__), c.module(sun.__name__)
+        on_cmd, m_cmd = c.var("on"), c.var("m_set")
+        c.emit("control", f"{on_cmd}, {m_cmd} = {mod}.control({x}, {p}, {on}, {T_st})")
+        c.write_command("control", f"{inst.name}.on", on_cmd)
+        c.write_command("control", f"{inst.name}.m_flow_set", m_cmd)
+        beam, dif, cos_t, S, m, T_sup, Q_loss = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "S", "m_solar",
+                                                                     "T_sup", "Q_loss"))
+        c.emit("hydraulics",
+               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{LATITUDE}], "
+               f"{p}[{LONGITUDE}], {p}[{TILT}], {p}[{AZIMUTH}], {p}[{ALBEDO}])",
+               f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
+               f"{m} = min(max({m_set}, 0.0), {p}[{M_FLOW_MAX}]) if {on} > 0.5 else 0.0",
+               f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})",
+               f"{st}_coil_m[{k}] = {m}",
+               f"{st}_coil_Tin[{k}] = {T_sup}",
+               f"{st}_coil_UA[{k}] = {p}[{UA}]")
+        Q, T_ret = c.var("Q_solar"), c.var("T_ret")
+        c.emit("volumes",
+               f"{T_ret} = {st}_coil_Tout[{k}] if {m} > 0.0 else {x}[{X_TRET}]",
+               f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
+               f"{mod}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
+               f"{x}[{X_EHEAT}] += {Q} * h",
+               f"{x}[{X_ESOLAR}] += ({beam} + {dif}) * {p}[{AREA}] * h")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{X_T}]",
+               f"{sig('T_sup', 'degC', 'collector outlet = coil inlet (mean over the step)')} = {x}[{X_TSUP}]",
+               f"{sig('T_ret', 'degC', 'coil outlet = collector inlet')} = {T_ret}",
+               f"{sig('m_flow', 'kg/s', 'solar circuit flow')} = {m}",
+               f"{sig('Q_flow', 'W', 'heat given by the coil to the storage')} = {Q}",
+               f"{sig('Q_loss', 'W', 'collector heat loss to the outdoor air')} = {Q_loss}",
+               f"{sig('G_plane', 'W/m2', 'irradiance on the collector plane (beam + diffuse + ground)')} = {beam} + {dif}",
+               f"{sig('E_heat', 'J', 'heat given to the storage since the start')} = {x}[{X_EHEAT}]",
+               f"{sig('E_solar', 'J', 'irradiation on the aperture since the start')} = {x}[{X_ESOLAR}]",
+               f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{AREA}] * h",
+               f"{c.ledger_entry(inst, 'heat')} += {S} * h",
+               f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")
