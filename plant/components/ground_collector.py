@@ -23,7 +23,8 @@ Physics in words
       T_sup = T_ret + Q_brine/(m_flow·CP)    (brine from the collector to the heat pump).
   With the pump off the brine rests at the ground-node temperature.
 * The heat pump reads T_sup of the previous step (start-of-step coupling, as everywhere in the
-  compiled step); the node steps explicitly and conservatively.
+  compiled step): the brine temperatures are set from the node's end-of-step temperature and
+  this step's source heat. The node steps explicitly and conservatively.
 
 Energy: E_ground (undisturbed ground → node) − E (node → brine) = C_ground·(T_g − T_g,0) exactly.
 The node holds soil, not water: it is outside the house's water-side ledger, where the heat pump
@@ -121,11 +122,8 @@ def step(dt, x, p, tau, Q, pump):
     T_u = undisturbed(p, tau)
     T_g = x[X_TG]
     Q_g = p[H_GROUND] * (T_u - T_g)
-    x[X_TSUP], x[X_TRET] = brine(p, T_g, Q, pump)
     x[X_TG] = T_g + dt * (Q_g - Q) / p[C_GROUND]
-    if pump <= 0.5:
-        x[X_TSUP] = x[X_TG]
-        x[X_TRET] = x[X_TG]
+    x[X_TSUP], x[X_TRET] = brine(p, x[X_TG], Q, pump)  # what the heat pump sees next step
     x[X_E] += Q * dt
     x[X_EG] += Q_g * dt
     return T_u, Q_g
