@@ -5,7 +5,7 @@
 
 The house file (syntax: plant/fmu/housefile.py) binds catalogue signals (plant/catalogue.py,
 so the device maps bind by name) to FMU variables, with units converted where they differ
-(plant.fmu.component.unit_conversion).  Catalogue inputs bind to FMU inputs, outputs to FMU
+(plant.fmu.binding.unit_conversion).  Catalogue inputs bind to FMU inputs, outputs to FMU
 outputs.  `catalogue` holds the bound signals only, in catalogue order; a signal the file does
 not bind is absent: get() raises a SignalError naming the house file and the [bindings] table,
 the map lint (`lint_all(maps, house.catalogue, house.name)`) reports each map point bound to it,

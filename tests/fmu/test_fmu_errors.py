@@ -113,7 +113,7 @@ def test_cli_reports_errors_without_traceback(tmp_path, capsys):
 
 
 def test_unit_conversions():
-    from plant.fmu.component import unit_conversion
+    from plant.fmu.binding import unit_conversion
 
     a, b = unit_conversion("degC", "K", "x")
     assert a * 20.0 + b == pytest.approx(293.15)
