@@ -66,6 +66,8 @@ Parameters (`Params`, packed in field order; indices I_*)
 | limiter       | 3       | 1      | 0..3        | 0 upwind, 1 van Leer, 2 MC, 3 superbee          |
 | T_init_top    | 80.0    | degC   | 0..100      | initial top layer (linear profile)              |
 | T_init_bottom | 40.0    | degC   | 0..100      | initial bottom layer                            |
+| soc_T0        | 40.0    | degC   | 0..100      | mean temperature of SOC 0 and of E_stored = 0   |
+| soc_Tmax      | 80.0    | degC   | 1..120      | mean temperature of SOC 1                       |
 
 House 1 values: buffer "WolfSPU2_800" 0.80 m3, 1.63 m, UA 20 W/K; DHW tank "WolfSEM1_500"
 0.50 m3, 1.51 m, UA 7 W/K, initial 65 -> 40 degC.  Coil parameters are per call (arrays):
@@ -73,22 +75,8 @@ DHW charging coil 0.95 m2 * 675 W/(m2 K) = 641 W/K over the original layers 8..6
 from the bottom), solar coil 1.8 m2 * 675 = 1215 W/K over layers 5..1; use `port_layer` to map
 heights to layer indices at any N.
 
-State of charge
----------------
-The reference (section 7.4) has three definitions:
-  (a) inside the ProHMo storage model: SOC = sum(T_i - T_env) / sum(T_max - T_env), T_env = 18 degC;
-  (b) the house controllers (SF1.mo): SOC = (mean(T) - T_0) / (T_max - T_0), buffer 40/80 degC,
-      DHW tank 15/80 degC;
-  (c) the SiL export of SF1 overrides (b) with 20/95 degC (buffer) and 40/80 degC (DHW).
-We use (b), the definition the house-1 controller thresholds (CHP on below 0.60, off above 0.95;
-boiler on below 0.50, off above 0.65) were tuned for: `soc(T, 40, 80)` for the buffer
-(SOC_BUFFER) and `soc(T, 15, 80)` for the DHW tank (SOC_DHW, the built-in SF1.mo definition).
-The SOC is not clipped (it is < 0 below a mean of T_0 and > 1 above T_max).
-`stored_energy(T, params, T_ref)` = CP RHO V/N sum(T - T_ref) [J].
-
-Sensors: `sensor_temperatures(T, n)` interpolates the layer-centre temperatures linearly to n
-equally spaced sensor heights (i - 0.5) H / n, i = 1 (bottom) ... n (top) - the lab's
-TS_S_TM_BT_1..10 (ProHMo: sensor i = layer i of 10); returned bottom first.
+State of charge, stored energy and sensor temperatures read off the layers (`soc`, `SOC_BUFFER`,
+`SOC_DHW`, `stored_energy`, `sensor_temperatures`): plant/components/storage_readings.py.
 
 Assumptions
 -----------
@@ -126,9 +114,6 @@ from ..water import CP, RHO
 
 K_WATER = 0.6  # W/(m K), still-water conductivity used for the default UA_layer
 COURANT_MAX = 0.5  # per-substep bound on (outflow Courant number + conduction/coil number)
-
-SOC_BUFFER = (40.0, 80.0)  # T_0, T_max [degC] of the house-1 buffer controller SOC
-SOC_DHW = (15.0, 80.0)  # T_0, T_max [degC] of the house-1 DHW-tank SOC (SF1.mo)
 
 LIMITER_UPWIND, LIMITER_VANLEER, LIMITER_MC, LIMITER_SUPERBEE = 0, 1, 2, 3
 
@@ -383,49 +368,7 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
 
 
 # ----------------------------------------------------------------------------------------------
-# helpers (not part of the kernel)
-
-
-@njit(cache=True)
-def soc(T, T_0, T_max):
-    """House-controller state of charge (mean(T) - T_0) / (T_max - T_0), not clipped."""
-    return (np.mean(T) - T_0) / (T_max - T_0)
-
-
-def stored_energy(T, params: Params, T_ref: float) -> float:
-    """Energy stored above T_ref [J]: CP RHO V/N sum(T - T_ref)."""
-    T = np.asarray(T, dtype=np.float64)
-    return float(CP * RHO * params.volume / len(T) * np.sum(T - T_ref))
-
-
-@njit(cache=True)
-def sensor_temperatures_into(T, out):
-    """Fill out[i] with the temperature at sensor i+1 of len(out) equally spaced sensors.
-
-    Sensor 1 (out[0]) is the lowest at height H/(2n), sensor n the highest; linear interpolation
-    between layer centres (layer k centre at 1 - (k + 0.5)/N of the height), clamped at the ends.
-    """
-    N = T.shape[0]
-    n = out.shape[0]
-    for i in range(n):
-        z = (i + 0.5) / n  # fraction of the height above the bottom
-        x = (1.0 - z) * N - 0.5  # position in layer-index coordinates (0 = top centre)
-        if x <= 0.0:
-            out[i] = T[0]
-        elif x >= N - 1:
-            out[i] = T[N - 1]
-        else:
-            k = int(x)
-            w = x - k
-            out[i] = (1.0 - w) * T[k] + w * T[k + 1]
-    return out
-
-
-@njit(cache=True)
-def sensor_temperatures(T, n_sensors=10):
-    """Temperatures at n equally spaced sensor heights, sensor 1 = bottom first (lab TS_S_TM_BT_1..n)."""
-    out = np.empty(n_sensors, dtype=np.float64)
-    return sensor_temperatures_into(T, out)
+# port heights (not part of the kernel)
 
 
 def port_layer(height_m: float, params: Params) -> int:
@@ -438,8 +381,7 @@ def port_layer(height_m: float, params: Params) -> int:
 
 
 __all__ = [
-    "Params", "initial_state", "state_names", "layer_conductance", "step", "n_substeps", "soc",
-    "stored_energy", "sensor_temperatures", "sensor_temperatures_into", "port_layer",
-    "SOC_BUFFER", "SOC_DHW", "I_VOLUME", "I_HEIGHT", "I_N_LAYERS", "I_UA_LOSS", "I_T_ENV",
+    "Params", "initial_state", "state_names", "layer_conductance", "step", "n_substeps", "port_layer",
+    "I_VOLUME", "I_HEIGHT", "I_N_LAYERS", "I_UA_LOSS", "I_T_ENV",
     "I_UA_LAYER", "I_LIMITER", "I_T_INIT_TOP", "I_T_INIT_BOTTOM", "I_SOC_T0", "I_SOC_TMAX",
 ]

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from plant.components import storage as st
+from plant.components.storage_readings import sensor_temperatures_into
 from plant.water import CP, RHO
 from tests.conftest import require_tool
 
@@ -87,7 +88,7 @@ def test_same_temperatures_as_native_over_a_day_and_energy_closes(storage_fmu, d
                 il[0], im[0], iT[0], ol[0] = N - 1, -m, Tb, 0
             om[0] = im[0]
             q_loss, _ = st.step(dt, T, p, il, im, iT, ol, om, out_T, e_i, e_i, e_f, e_f, e_f, e_f, q)
-            st.sensor_temperatures_into(T, sens)
+            sensor_temperatures_into(T, sens)
             max_layer = max(max_layer, np.abs(y[:N] - T).max())
             max_sensor = max(max_sensor, np.abs(y[N:N + 10] - sens).max())
             # the FMU's own ledger, from its outputs only

@@ -6,6 +6,7 @@ import pytest
 
 from plant.component import build_params, index_of, pack
 from plant.components import storage as S
+from plant.components import storage_readings as R
 from plant.errors import ConfigError
 from plant.water import CP, RHO
 
@@ -78,7 +79,7 @@ def test_no_flows_only_losses_over_24h_and_stays_stratified():
     dt, n = 60.0, 24 * 60
     p = pack(P)
     q = np.zeros(len(T))
-    E0 = S.stored_energy(T, P, 0.0)
+    E0 = R.stored_energy(T, P, 0.0)
     integral = 0.0  # trapezoid of UA_loss (T_mean - T_env) dt, from the states
     E_loss = 0.0
     for _ in range(n):
@@ -87,7 +88,7 @@ def test_no_flows_only_losses_over_24h_and_stays_stratified():
                        NO_F.copy(), q)
         integral += 0.5 * (before + P.UA_loss * (T.mean() - P.T_env)) * dt
         E_loss += Ql * dt
-    lost = E0 - S.stored_energy(T, P, 0.0)
+    lost = E0 - R.stored_energy(T, P, 0.0)
     assert lost == pytest.approx(integral, rel=5e-3)
     assert lost == pytest.approx(E_loss, rel=1e-12)
     # analytic mean decay: tau = C_tank / UA = 0.8 * 4.18e6 / 20 = 167,200 s -> 56.7 MJ lost in 24 h
@@ -229,10 +230,10 @@ def test_dhw_coil_heats_its_layers_and_energy_is_exact():
     _, E_coil, _, cTo = _run(P, T, 1, 1.0, coil=coil)
     assert cTo[0] == pytest.approx(40.0 + 30.0 * math.exp(-UA / (m * CP)), rel=1e-12)
     T = S.initial_state(P)
-    H0 = S.stored_energy(T, P, 0.0)
+    H0 = R.stored_energy(T, P, 0.0)
     E_loss, E_coil, _, cTo = _run(P, T, 600, 1.0, coil=coil)
     assert 40.0 < cTo[0] < Tin
-    assert S.stored_energy(T, P, 0.0) - H0 == pytest.approx(E_coil - E_loss, rel=1e-10)
+    assert R.stored_energy(T, P, 0.0) - H0 == pytest.approx(E_coil - E_loss, rel=1e-10)
     assert E_coil > 600 * 0.8 * m * CP * (Tin - 40.0) * (1 - math.exp(-UA / (m * CP))) * 0.5
     # the spanned layers (and by buoyancy the ones above) are warmer; below the coil unchanged
     assert np.all(T[top:bot + 1] > 45.0)
@@ -261,15 +262,15 @@ def test_substeps_and_outflow_temperature_is_step_mean():
 def test_helpers_soc_sensors_port_layer():
     P = S.Params()
     T = S.initial_state(P)  # 80 -> 40, mean 60
-    assert S.soc(T, *S.SOC_BUFFER) == pytest.approx(0.5)
-    assert S.soc(np.full(10, 80.0), *S.SOC_DHW) == pytest.approx(1.0)
-    assert S.stored_energy(T, P, 40.0) == pytest.approx(CP * RHO * 0.8 * 20.0)
+    assert R.soc(T, *R.SOC_BUFFER) == pytest.approx(0.5)
+    assert R.soc(np.full(10, 80.0), *R.SOC_DHW) == pytest.approx(1.0)
+    assert R.stored_energy(T, P, 40.0) == pytest.approx(CP * RHO * 0.8 * 20.0)
     # 10 layers -> the 10 sensors are the layers, bottom first
     T10 = np.linspace(80.0, 40.0, 10)
-    assert np.allclose(S.sensor_temperatures(T10, 10), T10[::-1])
+    assert np.allclose(R.sensor_temperatures(T10, 10), T10[::-1])
     # linear profile (layer centres at 0.0125 ... 0.9875 of the height): sensor at z reads
     # 40 + 40 (z - 0.0125) / 0.975, sensors at z = 0.05, 0.15, ... 0.95
-    s = S.sensor_temperatures(T, 10)
+    s = R.sensor_temperatures(T, 10)
     z = (np.arange(10) + 0.5) / 10
     assert np.allclose(s, 40.0 + 40.0 * (z - 0.0125) / 0.975, atol=1e-9)
     assert s[0] == pytest.approx(41.538, abs=1e-3)

@@ -69,7 +69,7 @@ def test_sensor_lag_and_inlet_mixing_options():
                    inlet_mixing_layers=8, sensor_lag={10: 600.0})
     h.run(6 * 3600.0, dt=1.0, out_interval=3600.0)
     assert h.ledger()["closure"] < 1e-6
-    from plant.components.storage import sensor_temperatures
+    from plant.components.storage_readings import sensor_temperatures
 
     raw = sensor_temperatures(h.state("storage"))
     assert abs(h.get("storage.T_sensor_9") - raw[8]) < 1e-9  # not lagged

@@ -141,7 +141,7 @@ static double st_step(double dt, double *T, int N, const StParams *p,
     return Q_loss * inv;
 }
 
-/* storage.sensor_temperatures_into: n equally spaced sensors, out[0] = lowest. */
+/* storage_readings.sensor_temperatures_into: n equally spaced sensors, out[0] = lowest. */
 static void st_sensors(const double *T, int N, double *out, int n) {
     for (int i = 0; i < n; i++) {
         double z = (i + 0.5) / n;
