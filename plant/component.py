@@ -88,6 +88,25 @@ def index_of(params_cls) -> dict[str, int]:
 __all__ = ["param", "describe", "build_params", "pack", "index_of", "dataclass", "dataclasses"]
 
 
+@dataclass
+class Instance:
+    """One declared component or connection: its name, kind, parameters and link options."""
+
+    name: str
+    kind: str
+    params: object            # the kind's frozen Params instance (or None)
+    options: dict             # link keys (instance names, heights, shares ...), validated by the kind
+    where: str                # "file:line [name]" for messages
+    order: int = 0            # declaration order (catalogue grouping)
+    lines: dict = field(default_factory=dict)  # key -> line in the house file
+
+    def at(self, key: str) -> str:
+        """"file:line [name] key" of one key (its own line when known)."""
+        path, _, rest = self.where.partition(":")
+        line = self.lines.get(key)
+        return f"{path}:{line} {rest.split(' ', 1)[1]} {key}" if line else f"{self.where} {key}"
+
+
 class Kind:
     """A component kind as the compiler sees it (plant/compiler.py): its parameters, the link
     keys a house file may give beside them, and the code it emits into the step's phases.

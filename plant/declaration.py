@@ -15,21 +15,13 @@ values before the checks, e.g. {"storage.UA_loss": 25.0, "switch.idle_flow.chp":
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, fields
 from difflib import get_close_matches
 from pathlib import Path
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
-
-from .compiler import Instance
-from .component import REQUIRED, build_params
+from .component import REQUIRED, Instance, build_params
 from .errors import ConfigError
-
-HOUSES = Path(__file__).parent / "houses"
+from .housefile import HOUSES, line_of, read, resolve  # noqa: F401 (the names house files are found by)
 HOUSE_KEYS = ("name", "description", "start", "base")
 PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday")
 # link keys that name other instances, and the role the named instance must have
@@ -49,37 +41,6 @@ class Declaration:
     instances: dict
     problems: list
     prof: tuple = ()
-
-
-def resolve(name_or_path: str | Path) -> Path:
-    p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.exists():
-            raise ConfigError(f"{p}: no such house file")
-        return p
-    candidate = HOUSES / f"{name_or_path}.toml"
-    if not candidate.exists():
-        known = sorted(f.stem for f in HOUSES.glob("*.toml"))
-        raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)}")
-    return candidate
-
-
-def line_of(text: str, section: str, key: str | None = None) -> int:
-    """Line number of [section] (or of key inside it) in the TOML text; 0 when not found."""
-    lines = text.splitlines()
-    start = None
-    for i, line in enumerate(lines, 1):
-        if re.match(rf"^\s*\[{re.escape(section)}\]\s*(#.*)?$", line):
-            start = i
-            if key is None:
-                return i
-            continue
-        if start is not None:
-            if re.match(r"^\s*\[", line):
-                break
-            if re.match(rf"^\s*([\"']?){re.escape(key)}\1\s*=", line):
-                return i
-    return start or 0
 
 
 def _hint(bad: str, names, what: str) -> str:
@@ -253,36 +214,6 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                             f"point's {role}s")
         if role == "emitter" and (inst.name, role) not in used:
             problems.append(f"{inst.where}: an emitter fed by nothing; name it as a mixing station's emitter")
-
-
-def read(path: Path, _seen: tuple = ()) -> dict:
-    """The file's tables; a file with [house] base = "other" is that house with these tables'
-    keys laid over it (a variant: a finer truth, a cut, another generator)."""
-    try:
-        doc = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    base = doc.get("house", {}).get("base") if isinstance(doc.get("house"), dict) else None
-    if base is None:
-        return doc
-    base_path = resolve(base) if not str(base).endswith(".toml") else path.parent / base
-    if base_path.resolve() in _seen or base_path.resolve() == path.resolve():
-        raise ConfigError(f"{path}: [house] base = {base!r}: a house cannot be its own base")
-    merged = read(base_path, _seen + (path.resolve(),))
-    for name in doc["house"].get("remove", []):
-        if name not in merged or name in ("house", "profiles"):
-            raise ConfigError(f"{path}: [house] remove = {name!r}: the base {base!r} declares no such "
-                              "instance; " + _hint(name, [k for k in merged if k not in ("house", "profiles")],
-                                                   "its instances"))
-        del merged[name]
-    for name, table in doc.items():
-        if isinstance(table, dict) and isinstance(merged.get(name), dict):
-            merged[name] = {**merged[name], **table}
-        else:
-            merged[name] = table
-    merged["house"].pop("base", None)
-    merged["house"].pop("remove", None)
-    return merged
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None) -> Declaration:

@@ -63,6 +63,8 @@ def load_house(name_or_path: str | Path = "house1", start: str | None = None,
     "switch.idle_flow.chp": 0.2}, validated like the file's own values.
     A house file with [house] topology = "fmu" gives an FmuHouse (plant/fmu/house.py).
     """
+    if controller not in CONTROLLERS:
+        raise ConfigError(f"controller = {controller!r}: unknown; allowed: {', '.join(CONTROLLERS)}")
     path = declaration.resolve(name_or_path)
     doc = declaration.read(path)
     if isinstance(doc.get("house"), dict) and doc["house"].get("topology") == "fmu":

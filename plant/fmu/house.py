@@ -38,10 +38,6 @@ from .component import open_fmu
 
 class FmuHouse:
     def __init__(self, spec, start: str | None = None, controller: str = "external"):
-        from ..house import CONTROLLERS
-
-        if controller not in CONTROLLERS:
-            raise ConfigError(f"controller = {controller!r}: unknown; allowed: {', '.join(CONTROLLERS)}")
         self.spec = spec
         self.name = spec.name
         self.start = start or spec.start

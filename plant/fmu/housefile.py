@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from difflib import get_close_matches
 from pathlib import Path
 
-from ..declaration import line_of, read
+from ..housefile import line_of, read
 from ..errors import ConfigError
 
 

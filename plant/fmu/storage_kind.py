@@ -35,7 +35,7 @@ import numpy as np
 
 from ..component import Kind as ComponentKind
 from ..components import storage, storage_kind
-from ..declaration import line_of
+from ..housefile import line_of
 
 _RUNNING: dict[int, "_Runtime"] = {}
 _KEYS = itertools.count(1)

@@ -15,7 +15,7 @@ an independent simulator as well (see docs/diagnose.md).
 """
 from __future__ import annotations
 
-from ..declaration import HOUSES
+from ..housefile import HOUSES
 from ..errors import ConfigError
 from ..house import House, load_house
 
