@@ -30,7 +30,7 @@ import can
 import numpy as np
 from pymodbus.client import ModbusTcpClient
 
-from gateway.maps.model import load_map
+from gateway.maps.loader import load_map
 
 REPO = Path(__file__).resolve().parents[1]
 CHP = load_map(REPO / "devices/chp_neotower2.toml")

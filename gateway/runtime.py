@@ -22,7 +22,7 @@ from gateway.audit import Audit
 from gateway.clock import LockStepClock, PacedClock
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
-from gateway.maps.model import load_all
+from gateway.maps.loader import load_all
 from gateway.transports.registry import transport_class
 from plant.errors import ConfigError
 from profiles.recording import Recorder

@@ -35,7 +35,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 # the object dictionaries are the ones `twin devices export-eds` writes, built from the maps
-from gateway.maps.model import load_map  # noqa: E402
+from gateway.maps.loader import load_map  # noqa: E402
 from gateway.transports.can_bus import open_bus  # noqa: E402
 from gateway.transports.canopen_od import build_object_dictionary  # noqa: E402
 

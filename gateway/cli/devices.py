@@ -8,7 +8,7 @@ from pathlib import Path
 
 from gateway.maps import export
 from gateway.maps.lint import lint_all, lint_map
-from gateway.maps.model import DEVICES_DIR, load_all, load_map
+from gateway.maps.loader import DEVICES_DIR, load_all, load_map
 from gateway.maps.toml_writer import to_toml
 
 EXAMPLES = """examples:

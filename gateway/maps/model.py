@@ -208,20 +208,9 @@ def map_path(name: str, directory: Path | None = None) -> Path:
     return path
 
 
-def load_all(directory: Path | None = None) -> dict[str, DeviceMap]:
-    """Every map in `directory`, by device id, in file-name order."""
-    directory = directory or DEVICES_DIR
-    return {p.stem: load_map(p) for p in sorted(directory.glob("*.toml"))}
-
-
-def load_map(path: str | Path) -> DeviceMap:
-    """Load and check one map (.toml, or a .csv register table); one DeviceMapError lists every problem."""
-    path = Path(path)
-    if not path.suffix:
-        path = map_path(str(path))
-    if path.suffix.lower() == ".csv":
-        from gateway.maps.csv_table import load_csv  # the CSV reader builds on this module
-        return load_csv(path)
+def load_toml(path: Path) -> DeviceMap:
+    """Load and check one TOML map; one DeviceMapError lists every problem (gateway/maps/loader.py
+    picks the reader by suffix)."""
     try:
         doc = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, tomllib.TOMLDecodeError) as exc:

@@ -11,7 +11,7 @@ import pytest
 
 from gateway.cli.main import main as twin
 from gateway.maps import export
-from gateway.maps.model import DEVICES_DIR, load_all, load_map
+from gateway.maps.loader import DEVICES_DIR, load_all, load_map
 from gateway.maps.toml_writer import to_toml
 from plant.errors import DeviceMapError
 

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from gateway.cli.main import main as twin
 from gateway.maps import codec, export
 from gateway.maps.lint import lint_all, lint_map
-from gateway.maps.model import DEVICES_DIR, load_all, load_map
+from gateway.maps.loader import DEVICES_DIR, load_all, load_map
 from plant.errors import DeviceMapError
 
 MAPS = load_all()

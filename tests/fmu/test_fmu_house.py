@@ -44,7 +44,7 @@ def test_runtime_serves_the_fmu_plant_over_modbus_like_the_native_house(house_fi
 
     from gateway.clock import LockStepClock
     from gateway.maps.lint import lint_all
-    from gateway.maps.model import load_all
+    from gateway.maps.loader import load_all
     from profiles.recording import read_recording
     from gateway.runtime import Runtime
     from plant.fmu.house import FmuHouse

@@ -14,7 +14,7 @@ import pytest
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.maps import codec
-from gateway.maps.model import load_all
+from gateway.maps.loader import load_all
 
 TIMEOUT = "timeout"
 

@@ -21,7 +21,7 @@ from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.device.refusal import REASONS
 from gateway.maps import codec
-from gateway.maps.model import DEVICES_DIR, load_map
+from gateway.maps.loader import DEVICES_DIR, load_map
 from gateway.transports.can_bus import open_bus
 from gateway.transports.can_hub import CanHub
 from gateway.transports.canopen_node import CanopenTransport
