@@ -18,14 +18,14 @@ Two things pymodbus cannot do through `action` are done in a request-handler sub
     identification (pymodbus keeps one global identity), and silence for unknown unit ids;
   * limits (connections beyond `max_connections` closed at once, silent ones after `idle_timeout`)
     and malformed frames, counted and consumed one by one before pymodbus sees them (TrafficLog).
-The server loop runs in its own thread; Device calls are thread-safe.
+The server loop runs in its own thread (gateway/event_loop.py ServerThread); Device calls are
+thread-safe. What a Device answers, without pymodbus's types: gateway/transports/modbus_answers.py.
 """
 from __future__ import annotations
 
 import asyncio
 import contextvars
 import logging
-import threading
 import time
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -41,7 +41,9 @@ from pymodbus.server.requesthandler import ServerRequestHandler
 from pymodbus.simulator import DataType, SimData, SimDevice
 
 from gateway.device.device import FC_TABLE, Device
+from gateway.event_loop import ServerThread
 from gateway.maps.model import BIT_TABLES, TABLES
+from gateway.transports.modbus_answers import identification, read_into, table_span
 from gateway.transports.traffic_log import TrafficLog, mbap_frame, quiet_pymodbus
 from plant.errors import TransportError
 
@@ -52,18 +54,11 @@ _REQUEST: contextvars.ContextVar[tuple[Device, Any, str]] = contextvars.ContextV
 
 def _simdata(device: Device, table: str) -> list[SimData]:
     """One block spanning the table's mapped addresses; the action decides what is mapped."""
-    points = [p for p in device.map.points if p.table == table]
+    span = table_span(device, table)
+    lo, count = span if span is not None else (0, 1)
     if table in BIT_TABLES:
-        if not points:
-            return [SimData(0, values=False, datatype=DataType.BITS)]
-        lo = min(p.address for p in points)
-        hi = max(p.address for p in points)
-        return [SimData(lo, count=hi - lo + 1, values=False, datatype=DataType.BITS)]
-    if not points:
-        return [SimData(0, datatype=DataType.REGISTERS)]
-    lo = min(p.address for p in points)
-    hi = max(p.address + p.words for p in points)
-    return [SimData(lo, count=hi - lo, datatype=DataType.REGISTERS)]
+        return [SimData(lo, count=count, values=False, datatype=DataType.BITS)]
+    return [SimData(lo, count=count, datatype=DataType.REGISTERS)]
 
 
 def _action(device: Device, transport: str):
@@ -77,23 +72,11 @@ def _action(device: Device, transport: str):
             if values is not None:
                 refusal = device.write_registers(table, address, [int(v) for v in values],
                                                  client, transport)
-                return ExcCodes(refusal.modbus_code) if refusal else None
-            if table in BIT_TABLES:
+            else:
                 # pymodbus passes the number of 16-bit words; the request holds the bit count.
-                n = getattr(pdu, "count", 0) if pdu is not None and fc in (1, 2) else 1
-                result = device.read_registers(table, address, max(n, 1))
-                if not isinstance(result, list):
-                    return ExcCodes(result.modbus_code)
-                for i, bit in enumerate(result):
-                    reg, pos = divmod(address + i, 16)
-                    reg -= start
-                    registers[reg] = (registers[reg] | (1 << pos)) if bit else (registers[reg] & ~(1 << pos))
-                return None
-            result = device.read_registers(table, address, count)
-            if not isinstance(result, list):
-                return ExcCodes(result.modbus_code)
-            registers[address - start:address - start + count] = result
-            return None
+                bits = getattr(pdu, "count", 0) if pdu is not None and fc in (1, 2) else 1
+                refusal = read_into(device, table, start, address, count, registers, bits)
+            return ExcCodes(refusal.modbus_code) if refusal else None
         except Exception:  # server-loop boundary: log, answer 04, keep serving
             log.exception("%s: action failed", device.id)
             return ExcCodes.DEVICE_FAILURE
@@ -326,18 +309,10 @@ def _direct(device: Device, pdu: Any, client: str, transport: str) -> Any:
 
 
 def _identification(device: Device, pdu: Any) -> Any:
-    ident = device.map.identity
-    objects = {0: ident.vendor, 1: str(ident.product_code), 2: ident.firmware,
-               3: "https://github.com/ (CoSES house twin)", 4: ident.product,
-               5: device.map.model, 6: device.id}
-    code = pdu.read_code
-    if code == 4:
-        if pdu.object_id not in objects:
-            return ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_ADDRESS)
-        info = {pdu.object_id: objects[pdu.object_id]}
-    else:
-        info = {k: v for k, v in objects.items() if k < (3 if code == 1 else 7)}
-    return ReadDeviceInformationResponse(read_code=code, information=info, dev_id=pdu.dev_id,
+    info = identification(device, pdu.read_code, pdu.object_id)
+    if info is None:
+        return ExceptionResponse(pdu.function_code, ExcCodes.ILLEGAL_ADDRESS)
+    return ReadDeviceInformationResponse(read_code=pdu.read_code, information=info, dev_id=pdu.dev_id,
                                          transaction_id=pdu.transaction_id)
 
 
@@ -367,51 +342,24 @@ class ModbusServer:
         self.max_connections, self.idle_timeout = max_connections, idle_timeout
         self.traffic = TrafficLog(name, log, on_event=on_event)
         self.port: int | None = None
-        self._loop: asyncio.AbstractEventLoop | None = None
         self._server: Any = None
-        self._thread: threading.Thread | None = None
-        self._ready = threading.Event()
-        self._error: BaseException | None = None
+        self._thread = ServerThread(f"{name}-server")
 
     def start(self) -> None:
         quiet_pymodbus()
-        self._thread = threading.Thread(target=self._run, name=f"{self.name}-server", daemon=True)
-        self._thread.start()
-        if not self._ready.wait(10):
-            raise TransportError(f"{self.name} {self.address}: server did not start within 10 s")
-        if self._error:
-            raise TransportError(f"{self.name} {self.address}: cannot serve ({self._error}); "
-                                 "check the address/port is free and the serial device exists")
+        self._thread.start(self._open, f"{self.name} {self.address}",
+                           "check the address/port is free and the serial device exists")
 
     def stop(self) -> None:
-        loop, server = self._loop, self._server
-        if loop is None or not loop.is_running():
+        if not self._thread.running:
             return
-        if server is not None:
+        if self._server is not None:
             try:
-                asyncio.run_coroutine_threadsafe(server.shutdown(), loop).result(5)
+                self._thread.call(self._server.shutdown(), 5)
             except Exception:  # shutting down anyway; a half-closed socket must not block stop()
                 log.exception("%s: shutdown", self.name)
-        loop.call_soon_threadsafe(loop.stop)
-        if self._thread:
-            self._thread.join(5)
+        self._thread.stop()
         self.traffic.flush()
-
-    def _run(self) -> None:
-        loop = asyncio.new_event_loop()
-        self._loop = loop
-        try:
-            loop.run_until_complete(self._open())
-        except BaseException as exc:  # reported to start() in the caller's thread
-            self._error = exc
-            self._ready.set()
-            loop.close()
-            return
-        self._ready.set()
-        try:
-            loop.run_forever()
-        finally:
-            loop.close()
 
     async def _open(self) -> None:
         sims = [SimDevice(id=d.unit_id, simdata=tuple(_simdata(d, t) for t in TABLES_ORDER),
