@@ -31,7 +31,7 @@ from .errors import ConfigError
 from .generated import PHASES, load_module, source  # noqa: F401 (load_module: House)
 from .signals import Signal, SignalCatalogue
 
-EMIT_ORDER = {"boundary": 0, "storage": 1, "connection": 2, "zone": 4, "controller": 5}
+EMIT_ORDER = {"boundary": 0, "storage": 1, "connection": 2, "zone": 4, "controller": 5, "sensor": 6}
 LEDGER_CATEGORIES = ("fuel", "el", "heat", "building", "dhw", "loss", "missing")
 
 
@@ -265,6 +265,12 @@ def _check_controller_links(c: Context, catalogue: SignalCatalogue) -> None:
     from difflib import get_close_matches
 
     for inst in c.instances.values():
+        for key in getattr(c.kinds[inst.kind], "SIGNAL_LINKS", ()):
+            name = inst.options.get(key)
+            if isinstance(name, str) and name not in catalogue:
+                close = get_close_matches(name, catalogue.names, n=3, cutoff=0.6)
+                c.problems.append(f"{inst.at(key)} = {name!r}: no such signal; "
+                                  + (f"did you mean {', '.join(close)}?" if close else "list them with `twin signals`"))
         for table, want in (("inputs", None), ("outputs", "input")):
             links = inst.options.get(table) if isinstance(inst.options, dict) else None
             if not isinstance(links, dict) or inst.kind == "profiles":

@@ -6,7 +6,7 @@ from .components import boiler, chp, dhw, heat_pump, mixing_station, pipe, radia
 from .connections import branch, coil, coupling_point, measured
 from .controllers import room_thermostat, rule_based
 from .fmu import storage_kind as storage_fmu
-from .components import pv, solar_collector
+from .components import pv, sensor, solar_collector
 from .components import floor_heating, ground_collector
 
 KINDS = {k.name: k for k in (
@@ -14,6 +14,6 @@ KINDS = {k.name: k for k in (
     mixing_station.Kind(), pipe.Kind(), dhw.Kind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
     measured.ConsumerKind(), measured.DrawKind(),
     rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),
-    pv.Kind(), solar_collector.Kind(),
+    pv.Kind(), solar_collector.Kind(), sensor.Kind(),
     heat_pump.BrineKind(), ground_collector.Kind(), floor_heating.Kind(),
 )}

@@ -149,3 +149,33 @@ def test_a_storage_with_five_connections_and_a_three_way_valve(tmp_path):
     n = len(low)
     assert house.state("storage")[int(0.15 * n)] > low[int(0.15 * n)]  # the upper pair warms the top
     assert house.get("heat_pump.E_heat") > E_low > 0  # it heated through both port pairs
+
+
+def test_a_sensor_effect_on_a_generator_outlet_cools_on_a_stagnant_pipe(tmp_path):
+    """kind = "sensor" on chp.T_sup: the reading follows the water while the CHP runs and cools
+    toward the room on the stagnant pipe (the twin alone holds the unit's water temperature)."""
+    text = HOUSE1 + '''
+[chp_outlet]
+kind = "sensor"
+signal = "chp.T_sup"
+stagnant_flow = "chp.m_flow"
+T_env = 18.0
+tau_stagnant = 600.0
+offset = 0.5
+'''
+    plain = load_house("house1", start="2021-01-12", controller="external")
+    house = load_house(_write(tmp_path, text, "sensor.toml"), start="2021-01-12", controller="external")
+    for h in (plain, house):
+        for name, v in (("chp.on", 1.0), ("chp.y_set", 1.0), ("mixer.T_sup_set", 60.0), ("mixer.m_flow_set", 0.2)):
+            h.set(name, v)
+        h.step(3600.0)
+    assert house.get("chp.T_sup") == pytest.approx(plain.get("chp.T_sup") + 0.5, abs=1e-9)  # running: offset only
+    for h in (plain, house):
+        h.set("chp.on", 0.0)
+        h.step(3 * 3600.0)
+    assert plain.get("chp.m_flow") == 0.0
+    assert house.get("chp.T_sup") < 18.0 + 0.5 + 0.2 * (plain.get("chp.T_sup") - 18.0)  # cooled toward the room
+    assert house.ledger()["closure"] < 1e-9  # a sensor moves no energy
+    bad = _write(tmp_path, text.replace('signal = "chp.T_sup"', 'signal = "chp.T_supp"'), "bad_sensor.toml")
+    with pytest.raises(ConfigError, match=r"\[chp_outlet\] signal = 'chp.T_supp': no such signal; did you mean chp.T_sup"):
+        load_house(bad)

@@ -1,0 +1,79 @@
+"""A sensor effect on any signal (`kind = "sensor"`): what a real thermometer or meter reports
+instead of the model's exact value. Declared like a component, so diagnosis and users add it to
+a house the same way:
+
+    [chp_outlet_sensor]
+    kind = "sensor"
+    signal = "chp.T_sup"          # the signal the sensor reports (overwritten in place)
+    lag = 60.0                    # s, first-order time constant (0: none)
+    offset = 0.3                  # K (or the signal's unit), added to what it reads
+    stagnant_flow = "chp.m_flow"  # optional: below stagnant_below the pipe stands still and
+    stagnant_below = 1e-4         #   the sensor cools toward T_env with tau_stagnant
+    T_env = 18.0
+    tau_stagnant = 1800.0
+
+Physics in words: a sensor in a thermowell follows its fluid with a first-order lag; on a pipe
+without flow it no longer sees the generator's water but the pipe cooling toward the room
+(first-order with the pipe's time constant). The offset is a calibration error. The filter runs
+on the end-of-step value and is applied again at the next step's start, so built-in controllers
+read what the sensor reports, as a PLC would.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
+
+
+@dataclass(frozen=True)
+class Params:
+    lag: float = param(0.0, "s", "first-order time constant (0: none)", 0.0, 1e5)
+    offset: float = param(0.0, "1", "added to the reading, in the signal's unit", -100.0, 100.0)
+    stagnant_below: float = param(1e-4, "kg/s", "flow below which the pipe stands still", 0.0, 10.0)
+    T_env: float = param(18.0, "degC", "surroundings the stagnant pipe cools toward", -30.0, 60.0)
+    tau_stagnant: float = param(1800.0, "s", "time constant of the stagnant pipe", 1.0, 1e6)
+
+
+LAG, OFFSET, STAGNANT_BELOW, T_ENV, TAU_STAGNANT = range(5)
+
+
+@njit(cache=True)
+def read(s, i, flow, x, p, h, update):
+    """Replace s[i] by the sensor's reading (flow < 0: no stagnant-pipe behaviour)."""
+    raw = s[i]
+    if not math.isfinite(x[0]):
+        x[0] = raw
+    if update:
+        if 0.0 <= flow < p[STAGNANT_BELOW]:
+            x[0] += -math.expm1(-h / p[TAU_STAGNANT]) * (p[T_ENV] - x[0])
+        elif p[LAG] > 0.0:
+            x[0] += -math.expm1(-h / p[LAG]) * (raw - x[0])
+        else:
+            x[0] = raw
+    s[i] = x[0] + p[OFFSET]
+
+
+class Kind(ComponentKind):
+    name = "sensor"
+    Params = Params
+    role = "sensor"
+    SIGNAL_LINKS = ("signal", "stagnant_flow")
+    LINKS = {"signal": (REQUIRED, "the signal the sensor reports"),
+             "stagnant_flow": (None, "a flow signal: below stagnant_below the pipe stands still")}
+
+    def emit(self, c, inst):
+        sig, flow = inst.options["signal"], inst.options["stagnant_flow"]
+        for key, v in (("signal", sig), ("stagnant_flow", flow)):
+            if v is not None and not isinstance(v, str):
+                c.problems.append(f"{inst.at(key)} = {v!r}: expected a signal name")
+                return
+        x = c.state(inst, np.full(1, np.nan))
+        p = c.param(inst, pack(inst.params))
+        mod = c.module(__name__)
+        f = c.s(flow) if flow else "-1.0"
+        c.emit("sense", f"{mod}.read(s, {c.s(sig)[2:-1]}, {f}, {x}, {p}, h, False)")
+        c.emit("signals", f"{mod}.read(s, {c.s(sig)[2:-1]}, {f}, {x}, {p}, h, True)")
