@@ -4,9 +4,10 @@
 does only the SDO protocol and NMT parsing, so this module adds what a real node does (stack notes):
 NMT states enforced (PDOs only in OPERATIONAL, no SDO in STOPPED, boot-up after reset), heartbeat
 from 0x1017, TPDOs on their event timer or every n-th SYNC, RPDOs applied through the Device (its
-validation and watchdog), the RPDO deadline (event timer, EMCY 0x8250), PDO remapping by SDO, SDO
-aborts from the Refusal table, and CAN faults: error frames, error-passive and bus-off (silent
-until "recover"), each reported through `on_event(dict)`.
+validation and watchdog), the RPDO deadline (event timer, EMCY 0x8250), PDO remapping by SDO
+(a PDO's configuration and the remapping check: `canopen_pdo`), SDO aborts from the Refusal table,
+and CAN faults: error frames, error-passive and bus-off (silent until "recover"), each reported
+through `on_event(dict)`.
 """
 from __future__ import annotations
 
@@ -23,7 +24,8 @@ from canopen.sdo import SdoAbortedError
 from gateway.maps.model import Point
 from gateway.transports.base import Transport
 from gateway.transports.can_bus import FAULT_KINDS, error_message, fault_kind, open_bus, parse_bus_spec
-from gateway.transports.canopen_od import N_PDO, PDO_INVALID, build_object_dictionary, point_objects
+from gateway.transports.canopen_od import N_PDO, build_object_dictionary, point_objects
+from gateway.transports.canopen_pdo import Pdo, mapping_abort
 from plant.errors import TransportError
 
 log = logging.getLogger(__name__)
@@ -35,24 +37,6 @@ SDO_UNSERVED, SDO_ABORT_COMMAND = (5, 6, 7), 0x05040001
 
 
 # ---------------------------------------------------------------------------------- one node
-class _Pdo:
-    """One PDO's configuration as read from 0x14xx-0x1Bxx, plus its run-time timers."""
-
-    def __init__(self, node: DeviceNode, comm: int, mapping: int) -> None:
-        cob = node.stored(comm, 1)
-        self.cob_id, self.enabled = cob & 0x7FF, not cob & PDO_INVALID
-        self.trans_type, self.event_s = node.stored(comm, 2), node.stored(comm, 5) / 1000.0
-        self.entries = []
-        for i in range(1, node.stored(mapping, 0) + 1):
-            value = node.stored(mapping, i)
-            if value >> 16:
-                self.entries.append((value >> 16, (value >> 8) & 0xFF, value & 0xFF))
-        self.size = sum(bits for _, _, bits in self.entries) // 8
-        self.due = 0.0            # next event-timer transmission (TPDO)
-        self.last_rx = None       # last reception (RPDO deadline)
-        self.syncs = 0
-
-
 class DeviceNode(canopen.LocalNode):
     """A Device served as a CANopen node: live SDO values, NMT, heartbeat, PDOs, bus faults."""
 
@@ -64,8 +48,8 @@ class DeviceNode(canopen.LocalNode):
         self._write_callbacks.clear()   # NmtSlave would run its own heartbeat task; we produce it
         self.bus_off = self.error_passive = False
         self.history: list[int] = []
-        self.tpdos: list[_Pdo] = []
-        self.rpdos: dict[int, _Pdo] = {}
+        self.tpdos: list[Pdo] = []
+        self.rpdos: dict[int, Pdo] = {}
         self.hb_due = 0.0
 
     # canopen's LocalNode subscribes the SDO server and NMT slave directly; route them through us
@@ -130,7 +114,9 @@ class DeviceNode(canopen.LocalNode):
             self.history.clear()
             return
         if index in range(0x1600, 0x1604) or index in range(0x1A00, 0x1A04):
-            self._check_mapping(index, subindex, value)
+            abort = mapping_abort(index, subindex, value, self.stored, self._find_object)
+            if abort is not None:
+                raise SdoAbortedError(abort)
         super().set_data(index, subindex, data)
         if index == 0x1017:
             self.hb_due = 0.0   # a new producer time restarts the heartbeat timer now
@@ -144,26 +130,12 @@ class DeviceNode(canopen.LocalNode):
         if refusal is not None:
             raise SdoAbortedError(refusal.sdo_abort)
 
-    def _check_mapping(self, index: int, subindex: int, value: int) -> None:
-        receive = index < 0x1800
-        if subindex == 0:
-            entries = [self.stored(index, i) for i in range(1, min(value, 8) + 1)]
-            if value > 8 or sum(e & 0xFF for e in entries) > 64:
-                raise SdoAbortedError(0x06040042)   # mapped objects exceed the PDO length
-            return
-        target, sub, bits = value >> 16, (value >> 8) & 0xFF, value & 0xFF
-        if target == 0:
-            return
-        obj = self._find_object(target, sub)
-        if not obj.pdo_mappable or bits != len(obj) or (obj.writable if receive else obj.readable) is False:
-            raise SdoAbortedError(0x06040041)       # object cannot be mapped to the PDO
-
     def load_pdos(self) -> None:
         with self.lock:
             for pdo in self.rpdos.values():
                 self.network.unsubscribe(pdo.cob_id, self._on_rpdo)
-            self.tpdos = [_Pdo(self, 0x1800 + n, 0x1A00 + n) for n in range(N_PDO)]
-            rpdos = [_Pdo(self, 0x1400 + n, 0x1600 + n) for n in range(N_PDO)]
+            self.tpdos = [Pdo(self.stored, 0x1800 + n, 0x1A00 + n) for n in range(N_PDO)]
+            rpdos = [Pdo(self.stored, 0x1400 + n, 0x1600 + n) for n in range(N_PDO)]
             self.rpdos = {p.cob_id: p for p in rpdos if p.enabled and p.entries}
             for cob_id in self.rpdos:
                 self.network.subscribe(cob_id, self._on_rpdo)
@@ -273,7 +245,7 @@ class DeviceNode(canopen.LocalNode):
                     self.transport.report(self, "rpdo_timeout", cob_id=pdo.cob_id)
             return next_due
 
-    def _transmit(self, pdo: _Pdo) -> None:
+    def _transmit(self, pdo: Pdo) -> None:
         payload = b"".join(self.get_data(i, s)[:bits // 8] for i, s, bits in pdo.entries)
         self.send_message(pdo.cob_id, payload)
 
