@@ -8,7 +8,7 @@ from .controllers import room_thermostat, rule_based
 from .fmu import storage_kind as storage_fmu
 from .components import pv, sensor, solar_collector
 from .components import floor_heating, ground_collector
-from .components import electric_heater
+from .components import electric_heater, substation
 
 KINDS = {k.name: k for k in (
     boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
@@ -17,5 +17,5 @@ KINDS = {k.name: k for k in (
     rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),
     pv.Kind(), solar_collector.Kind(), sensor.Kind(),
     heat_pump.BrineKind(), ground_collector.Kind(), floor_heating.Kind(),
-    electric_heater.Kind(),
+    electric_heater.Kind(), substation.Kind(),
 )}
