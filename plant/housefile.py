@@ -14,6 +14,13 @@ except ModuleNotFoundError:  # Python 3.10
 from .errors import ConfigError
 
 HOUSES = Path(__file__).parent / "houses"
+# the CoSES laboratory's names of the five houses (reference §12), accepted wherever a house is named
+ALIASES = {"SF1": "house1", "SF2": "house2", "SF3": "house3", "SF4": "house4", "MF5": "house5"}
+
+
+def alias_of(name: str) -> str | None:
+    """The laboratory's name of a shipped house (house2 -> SF2), or None."""
+    return next((a for a, n in ALIASES.items() if n == name), None)
 
 
 def resolve(name_or_path: str | Path) -> Path:
@@ -22,10 +29,12 @@ def resolve(name_or_path: str | Path) -> Path:
         if not p.exists():
             raise ConfigError(f"{p}: no such house file")
         return p
+    name_or_path = ALIASES.get(str(name_or_path).upper(), name_or_path)
     candidate = HOUSES / f"{name_or_path}.toml"
     if not candidate.exists():
         known = sorted(f.stem for f in HOUSES.glob("*.toml"))
-        raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)}")
+        raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)} "
+                          f"(laboratory names: {', '.join(ALIASES)})")
     return candidate
 
 
