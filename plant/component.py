@@ -123,6 +123,7 @@ class Kind:
     LINKS: dict = {}
     REFS: dict = {}          # link key -> role of the instance(s) it names (checked by the declaration)
     role = "component"       # generator | consumer | storage | emitter | zone | controller | ...
+    ROLES: tuple = ()        # every role a kind may be named in, when more than its `role`
 
     def initial_state(self, inst) -> np.ndarray:
         return np.zeros(0)

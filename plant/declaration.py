@@ -168,7 +168,7 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                     bad = True
                     continue
                 other = KINDS[instances[n].kind]
-                if other.role != role:
+                if role not in other.ROLES and other.role != role:
                     hint = PUMP_HINT.get(other.role, f"a {role} is needed here")
                     if key == "consumers":
                         hint = f"a {instances[n].kind} has no pump of its own: " + PUMP_HINT.get(other.role, hint)
@@ -208,10 +208,12 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                 problems.append(f"{path}:{line_of(text, inst.name, 'hydraulics')} [{inst.name}] hydraulics = "
                                 f"{inst.options.get('hydraulics')!r}: unknown; allowed: prescribed, pressure_driven")
     for inst in instances.values():
-        role = KINDS[inst.kind].role
-        if role in ("generator", "consumer") and (inst.name, role) not in used:
+        kind = KINDS[inst.kind]
+        role = kind.role
+        roles = kind.ROLES or (role,)
+        if role in ("generator", "consumer") and not any((inst.name, r) in used for r in roles):
             problems.append(f"{inst.where}: a {inst.kind} connected to nothing; list it in a coupling "
-                            f"point's {role}s")
+                            f"point's {' or '.join(r + 's' for r in roles)}")
         if role == "emitter" and (inst.name, role) not in used:
             problems.append(f"{inst.where}: an emitter fed by nothing; name it as a mixing station's emitter")
 

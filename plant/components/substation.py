@@ -41,7 +41,7 @@ How it sits in a house file (one instance in both lists of one coupling point):
     generators = ["boiler", "substation"]        # extraction (required: every substation extracts)
     consumers = ["mixer", "substation"]          # feed-in (optional)
 Listed only as a generator (or a branch's generator) it extracts only; a negative m_flow_set
-then moves nothing. The role is `generator` and `consumer` at once (`GENERATOR_AND_CONSUMER`).
+then moves nothing. The kind has the roles `generator` and `consumer` (ROLES): one instance may be named in both lists.
 
 Inputs: `m_flow_set` (kg/s, signed: the lab's CHN_S_FW_HC_set), `m_flow_grid_set` (kg/s, >= 0:
 CHN_S_FW_TG_set), `T_grid_sup`, `T_grid_ret` (degC; the kind writes the parameters' values
@@ -95,26 +95,7 @@ STATES = ("E_extracted", "E_fed_in")
 X_E_EXTRACTED, X_E_FED_IN = range(2)
 
 
-class _Roles(str):
-    """A role equal to each of several role names: the declaration checks a generator list and a
-    consumer list against it, and both accept the one instance. Its text and hash are its first
-    role's, so a substation must be listed as a generator somewhere (every one extracts)."""
 
-    def __new__(cls, *roles):
-        obj = super().__new__(cls, roles[0])
-        obj.roles = roles
-        return obj
-
-    def __eq__(self, other):
-        return isinstance(other, str) and str.__str__(other) in self.roles
-
-    def __ne__(self, other):
-        return not self.__eq__(other)
-
-    __hash__ = str.__hash__
-
-
-GENERATOR_AND_CONSUMER = _Roles("generator", "consumer")
 
 
 @njit(cache=True)
@@ -171,7 +152,8 @@ class Kind(ComponentKind):
 
     name = "substation"
     Params = Params
-    role = GENERATOR_AND_CONSUMER
+    role = "generator"
+    ROLES = ("generator", "consumer")
 
     def _slots(self, c, inst):
         """State, parameters and inputs, allocated at the first of the two protocol calls."""
@@ -210,24 +192,28 @@ class Kind(ComponentKind):
         """Signals, heat meters and ledger, once both protocol calls are in (connections emit
         before this role)."""
         k = c.values.get(f"{inst.name}.substation")
-        if k is None or "gen" not in k:
-            return  # not on a generator list: reported by the declaration
+        if k is None:
+            return  # on no coupling point: reported by the declaration
         x = k["x"]
-        m_g, Tin_g, Tout_g, mg_g, Tg_g, eps_g = k["gen"]
-        Q_g = c.var("Q_extracted")
-        lines = [f"{Q_g} = {m_g} * CP * ({Tout_g} - {Tin_g})",
-                 f"{c.ledger_entry(inst, 'fuel')} += {Q_g} * h",
-                 f"{c.ledger_entry(inst, 'heat')} += {Q_g} * h"]
-        Q = Q_g
+        lines, Q = [], "0.0"
+        if "gen" in k:
+            m_g, Tin_g, Tout_g, mg_g, Tg_g, eps_g = k["gen"]
+            Q = c.var("Q_extracted")
+            lines += [f"{Q} = {m_g} * CP * ({Tout_g} - {Tin_g})",
+                      f"{c.ledger_entry(inst, 'fuel')} += {Q} * h",
+                      f"{c.ledger_entry(inst, 'heat')} += {Q} * h"]
         if "con" in k:
             m_c, Tin_c, Tout_c, mg_c, Tg_c, eps_c = k["con"]
             Q_c = c.var("Q_fed_in")
             lines += [f"{Q_c} = {m_c} * CP * ({Tin_c} - {Tout_c})",
                       f"{c.ledger_entry(inst, 'building')} += {Q_c} * h"]
-            Q = c.var("Q_dh")
-            lines.append(f"{Q} = {Q_g} - {Q_c}")
-        else:
-            m_c, Tin_c, Tout_c, mg_c, Tg_c, eps_c = "0.0", Tout_g, Tin_g, "0.0", k["T_grid_ret"], "0.0"
+            Q_net = c.var("Q_dh")
+            lines.append(f"{Q_net} = {Q} - {Q_c}")
+            Q = Q_net
+        else:  # extraction only
+            m_c, Tin_c, Tout_c, mg_c, Tg_c, eps_c = "0.0", k["gen"][2], k["gen"][1], "0.0", k["T_grid_ret"], "0.0"
+        if "gen" not in k:  # feed-in only
+            m_g, Tin_g, Tout_g, mg_g, Tg_g, eps_g = "0.0", Tout_c, Tin_c, "0.0", k["T_grid_sup"], "0.0"
         fed = f"{k['m_set']} < 0.0"
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals", *lines,

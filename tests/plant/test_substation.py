@@ -167,8 +167,9 @@ def test_extraction_only_on_a_branch(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, message", [
-    ('generators = ["boiler", "chp", "substation"]', 'generators = ["boiler", "chp"]',
-     "a substation connected to nothing; list it in a coupling point's generators"),
+    ('generators = ["boiler", "chp", "substation"]\nconsumers = ["mixer", "dhw_pump", "substation"]',
+     'generators = ["boiler", "chp"]\nconsumers = ["mixer", "dhw_pump"]',
+     "a substation connected to nothing; list it in a coupling point's generators or consumers"),
     ('consumers = ["mixer", "dhw_pump", "substation"]', 'consumers = ["mixer", "dhw_pump", "substation", "substation"]',
      "port connected twice"),
     ('kind = "substation"', 'kind = "substation"\nepsilon = 1.5', "epsilon = 1.5: out of range; allowed -1.0 … 1.0"),
@@ -180,3 +181,18 @@ def test_bad_declarations_are_reported(tmp_path, old, new, message):
     with pytest.raises(ConfigError) as err:
         load_house(path)
     assert message in str(err.value)
+
+
+def test_a_feed_in_only_substation_is_a_consumer(tmp_path):
+    """The kind has both roles: named only among the consumers it can feed in, never extract."""
+    path = tmp_path / "feed_in.toml"
+    path.write_text(DH.format(base=HOUSES / "house1.toml", extra="").replace(
+        'generators = ["boiler", "chp", "substation"]', 'generators = ["boiler", "chp"]'))
+    house = load_house(path, controller="external")
+    house.set("substation.m_flow_set", -0.1)
+    house.set("substation.m_flow_grid_set", 0.1)
+    house.step(600.0)
+    assert house.get("substation.Q_flow") < 0.0  # heat went to the grid
+    L = house.ledger()
+    assert L["building_substation"] > 1e6  # J fed in over the 10 minutes
+    assert abs(L["residual"]) < 1e-9 * L["heat_building"]  # no fuel burnt: closed against the heat moved
