@@ -306,7 +306,7 @@ def compile_plant(decl) -> CompiledPlant:
     for inst in sorted(decl.instances.values(), key=lambda i: EMIT_ORDER.get(KINDS[i.kind].role, 3)):
         try:
             KINDS[inst.kind].emit(c, inst)
-        except (KeyError, TypeError, AttributeError):
+        except (KeyError, TypeError, AttributeError, ValueError):
             if not decl.problems:
                 raise  # a kind's own bug, not a consequence of a reported bad link
             c.failed.add(inst.name)
@@ -317,7 +317,7 @@ def compile_plant(decl) -> CompiledPlant:
         if name in decl.instances and KINDS[decl.instances[name].kind].role == "storage":
             try:
                 KINDS[decl.instances[name].kind].allocate(c, decl.instances[name], ports)
-            except (KeyError, TypeError, AttributeError):
+            except (KeyError, TypeError, AttributeError, ValueError):
                 if not decl.problems:
                     raise
         elif not problems:

@@ -186,10 +186,9 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
             elif bad:
                 inst.options[key] = None
         if inst.kind == "coupling_point":
-            if not inst.options.get("generators"):
-                problems.append(f"{inst.where} generators: a coupling point needs at least one generator "
-                                "(a loop with no pump)")
-                inst.options["generators"] = None
+            if not inst.options.get("generators") and not inst.options.get("consumers"):
+                problems.append(f"{inst.where} generators, consumers: a coupling point needs a pumped branch "
+                                "(a generator or a consumer); a loop with no pump carries no flow")
             gens = inst.options.get("generators") or []
             for key in ("idle_flow", "pump_coupling"):
                 table = inst.options.get(key)

@@ -31,7 +31,7 @@ class Kind(ComponentKind):
     REFS = {"generators": "generator", "consumers": "consumer", "storage": "storage",
             "supply": "volume", "return": "volume"}
     LINKS = {"hydraulics": ("prescribed", "prescribed (ideal switch) or pressure_driven"),
-             "generators": (REQUIRED, "generator instances on the point, in the order they are stepped"),
+             "generators": ((), "generator instances on the point, in the order they are stepped"),
              "consumers": ((), "consumer instances (pumped: mixing stations, coils)"),
              "storage": (REQUIRED, "the storage that separates generators and consumers"),
              "storage_top": (REQUIRED, "height of the storage's upper port [m]"),
@@ -95,7 +95,7 @@ class Kind(ComponentKind):
                                       f"of 0 … {st.params.n_layers - 1}")
         cmod = c.module(__name__)
         c.emit("hydraulics",
-               f"{m_gen} = {' + '.join(m for m, _ in flows)}",
+               f"{m_gen} = {' + '.join(m for m, _ in flows) or '0.0'}",
                f"{m_ch}, {m_dis} = {hyd}.split({m_gen}, {m_dem})",
                f"{cmod}.inlet({a}_in_layer[{i0}:{i0 + n_in}], {a}_in_m[{i0}:{i0 + n_in}], "
                f"{a}_in_T[{i0}:{i0 + n_in}], {p}[2], x_{a}.shape[0], {m_ch} > 0.0, "
@@ -109,7 +109,7 @@ class Kind(ComponentKind):
                f"    {a}_out_m[{j}] = {m_dis}")
         pipe = c.module("plant.components.pipe")
         Hs, Hr, Qs, Qr = (c.var(v) for v in ("H_sup", "H_ret", "Q_loss_sup", "Q_loss_ret"))
-        h_gen = " + ".join(f"{m} * CP * {T}" for m, T in flows)
+        h_gen = " + ".join(f"{m} * CP * {T}" for m, T in flows) or "0.0"
         h_con = " + ".join(f"{m} * CP * {T}" for m, T in demand)
         m_con = " + ".join(m for m, _ in demand)
         c.emit("volumes",

@@ -179,3 +179,39 @@ offset = 0.5
     bad = _write(tmp_path, text.replace('signal = "chp.T_sup"', 'signal = "chp.T_supp"'), "bad_sensor.toml")
     with pytest.raises(ConfigError, match=r"\[chp_outlet\] signal = 'chp.T_supp': no such signal; did you mean chp.T_sup"):
         load_house(bad)
+
+
+def test_a_coupling_point_without_generators_feeds_consumers_from_the_storage(tmp_path):
+    """Generators piped straight to the storage (branches), the heating circuit and the DHW coil
+    on a coupling point of their own: the storage feeds them (houses 2-4 draw heating this way)."""
+    text = f'''
+[house]
+name = "storage_fed"
+base = "{HOUSES / "house1.toml"}"
+
+[boiler_branch]
+kind = "branch"
+generator = "boiler"
+storage = "storage"
+supply = 1.50
+return = 0.10
+
+[chp_branch]
+kind = "branch"
+generator = "chp"
+storage = "storage"
+supply = 1.55
+return = 0.05
+
+[switch]
+generators = []
+idle_flow = {{}}
+pump_coupling = {{}}
+storage_top = 1.20
+storage_bottom = 0.15
+'''
+    house = load_house(_write(tmp_path, text, "storage_fed.toml"), start="2021-01-12")
+    house.run(2 * 86400, dt=1.0, out_interval=3600)
+    L = house.ledger()
+    assert L["closure"] < 1e-9 and L["heat_building"] > 0 and L["heat_chp"] > 0
+    assert house.get("zone.T_room") > 17.0
