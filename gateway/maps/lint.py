@@ -93,16 +93,22 @@ def lint_all(maps: dict[str, DeviceMap], catalogue: Any = None, house: str = "ho
         seen: dict[tuple[str, int], str] = {}
         for dmap in maps.values():
             value = dmap.unit_id if attr == "unit_id" else dmap.canopen.node_id
-            key = (dmap.house, value)
-            if key in seen:
-                out.append(Problem("error", f"{dmap.path}: {label} {value} also used by "
-                                   f"{seen[key]}; give each device of a house its own"))
-            seen[key] = dmap.id
+            for house_name in served(dmap):
+                key = (house_name, value)
+                if key in seen:
+                    out.append(Problem("error", f"{dmap.path}: {label} {value} also used by "
+                                       f"{seen[key]} in {house_name}; give each device of a house its own"))
+                seen[key] = dmap.id
     return out
 
 
+def served(dmap: DeviceMap) -> list[str]:
+    """The houses a map serves: its `house`, several separated by '/' (as the runtime reads it)."""
+    return dmap.house.split("/")
+
+
 def _bindings(dmap: DeviceMap, catalogue: Any, house: str) -> list[Problem]:
-    if dmap.house != house:
+    if house not in served(dmap):
         return [Problem("note", f"{dmap.path}: map is for {dmap.house!r}, bindings not checked "
                         f"against {house!r}")]
     out: list[Problem] = []

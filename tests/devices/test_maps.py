@@ -1,4 +1,5 @@
-"""Every shipped map loads, lints clean against the real house-1 catalogue, and round-trips the codec."""
+"""Every shipped map loads, lints clean against the real catalogue of each house it serves,
+and round-trips the codec."""
 from __future__ import annotations
 
 import csv
@@ -12,8 +13,9 @@ from hypothesis import strategies as st
 
 from gateway.cli.main import main as twin
 from gateway.maps import codec, export
-from gateway.maps.lint import lint_all, lint_map
+from gateway.maps.lint import lint_all, lint_map, served
 from gateway.maps.loader import DEVICES_DIR, load_all, load_map
+from plant.declaration import HOUSES
 from plant.errors import DeviceMapError
 
 MAPS = load_all()
@@ -25,9 +27,37 @@ def catalogue():
     return load_house("house1").catalogue
 
 
-def test_all_six_maps_are_shipped():
+def test_all_maps_are_shipped():
     assert set(MAPS) == {"chp_neotower2", "boiler_wolf_cgb", "mixing_station", "storage_io",
-                         "dhw_station", "heat_pump_wolf_cha10"}
+                         "dhw_station", "heat_pump_wolf_cha10", "heat_pump_wolf_bws1_10",
+                         "boiler_wolf_cgb20", "boiler_wolf_cgb50", "chp_neotower5", "solar_station",
+                         "solar_station_dhw", "electric_heater", "district_substation"}
+
+
+SHIPPED_HOUSES = sorted({h for m in MAPS.values() for h in served(m) if (HOUSES / f"{h}.toml").exists()})
+
+
+@pytest.mark.parametrize("house", SHIPPED_HOUSES)
+def test_maps_lint_clean_against_each_house_they_serve(house):
+    """Every map whose `house` names a shipped house binds only that house's signals and inputs,
+    and the devices of one house have distinct unit and node ids."""
+    from plant.house import load_house
+    problems = lint_all(MAPS, load_house(house).catalogue, house)
+    assert [p for p in problems if p.level == "error"] == []
+    checked = [m.id for m in MAPS.values() if house in served(m)]
+    assert checked and not any(p.level == "note" and any(f"{i}.toml" in p.text for i in checked)
+                               for p in problems)
+
+
+def test_a_map_for_a_house_not_shipped_is_a_note():
+    """The substation serves the house-1 variant with a substation, which no house file ships:
+    lint against house 1 notes it and checks the rest."""
+    assert not (HOUSES / "house1_substation.toml").exists()
+    problems = lint_map(MAPS["district_substation"], None, "house1")
+    assert problems == []                                            # no catalogue: no binding check
+    from plant.house import load_house
+    notes = lint_map(MAPS["district_substation"], load_house("house1").catalogue, "house1")
+    assert [p.level for p in notes] == ["note"] and "house1_substation" in notes[0].text
 
 
 def test_maps_lint_clean_against_house1(catalogue):
