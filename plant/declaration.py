@@ -153,7 +153,7 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
             if key not in inst.options or inst.options[key] is None:
                 continue
             v = inst.options[key]
-            names = v if isinstance(v, list) else [v]
+            names = list(v) if isinstance(v, (list, tuple)) else [v]
             if not all(isinstance(n, str) for n in names):
                 problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {v!r}: "
                                 "expected instance name(s) (strings)")
@@ -181,7 +181,7 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                         continue
                     used[(n, role)] = inst.name
                 keep.append(n)
-            if isinstance(v, list):
+            if isinstance(v, (list, tuple)):
                 inst.options[key] = keep  # the good names stay, so one bad name hides no other problem
             elif bad:
                 inst.options[key] = None

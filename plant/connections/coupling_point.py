@@ -122,9 +122,17 @@ class Kind(ComponentKind):
                f"{sig('T_sup', 'degC', 'supply header temperature')} = {T_sh}",
                f"{sig('T_ret', 'degC', 'return header temperature (what the generators receive)')} = {T_rh}",
                f"{sig('Q_loss', 'W', 'heat loss of both headers')} = {Qs} + {Qr}",
-               f"{c.named_signal(f'{a}.m_flow', 'kg/s', 'output', 'net charging flow through the coupling point (+ charging through the top, - discharging)', st.order)} = {m_ch} - {m_dis}",
+               f"{self._storage_flow(c, inst, st)} = {m_ch} - {m_dis}",
                f"{c.ledger_entry(inst, 'loss')} += ({Qs} + {Qr}) * h")
 
+
+    def _storage_flow(self, c, inst, st):
+        """The signal of the storage's net charging flow: <storage>.m_flow for the first point on a
+        storage, <point>.m_flow_storage for any further one."""
+        desc = "net charging flow through the coupling point (+ charging through the top, - discharging)"
+        if f"{st.name}.m_flow" in c._sig_index:
+            return c.signal(inst, "m_flow_storage", "kg/s", "output", desc)
+        return c.named_signal(f"{st.name}.m_flow", "kg/s", "output", desc, st.order)
 
     def _pressure_driven(self, c, inst, gens, m_dem, T_rh):
         """Two generators on the network of plant/hydraulics/pressure_driven.py: the first behind
