@@ -20,7 +20,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 BASELINE = "16e099a"  # the release before houses became declarations
-HOUSES = ("house1", "house1_heat_pump", "house1_solar", "house1_truth", "house1_cut_storage")
+HOUSES = ("house1", "house2", "house3", "house4", "house5", "house1_heat_pump", "house1_solar", "house1_truth",
+          "house1_cut_storage")
 TARGET_HOUSE1, TARGET_ANY = 200_000.0, 100_000.0
 
 
