@@ -1,5 +1,9 @@
 """Measured boundaries: a subsystem cut out of a house runs against recorded signals.
 
+Kinds: measured_consumer (primary flow and return on a coupling point), measured_circuit (a
+heating circuit measured on its building side), measured_generator (flow and outlet temperature),
+measured_draw (hot water taken), measured_zone (room temperature).
+
 `measured_consumer` stands on a coupling point where a consumer was: it draws the flow of its
 input `<name>.m_flow` from the supply header and returns it at `<name>.T_return` (bind both to a
 recording: House.bind). `measured_draw` takes hot water from a storage at the measured flow
@@ -9,6 +13,8 @@ as heat to the building / to hot water, so a cut closes its energy balance like 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+import numpy as np
 
 from ..component import REQUIRED, Kind as ComponentKind, pack, param
 
@@ -55,3 +61,73 @@ class DrawKind(ComponentKind):
         c.emit("signals", f"{Q} = {mv} * CP * ({st}_out_T[{i_out}] - {p}[0])",
                f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat drawn with the hot water')} = {Q}",
                f"{c.ledger_entry(inst, 'dhw')} += {Q} * h")
+
+
+class GeneratorKind(ComponentKind):
+    """A generator whose outlet is measured: it delivers `<name>.m_flow` at `<name>.T_sup` (the
+    storage driven by measured generator flows and outlet temperatures)."""
+
+    name = "measured_generator"
+    role = "generator"
+
+    def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
+        m_in = c.signal(inst, "m_flow", "kg/s", "input", "measured generator flow")
+        T_in_meas = c.signal(inst, "T_sup", "degC", "input", "measured generator outlet temperature")
+        m, T, Q = c.var("m_gen_meas"), c.var("T_gen_meas"), c.var("Q_gen_meas")
+        c.emit("hydraulics", f"{m} = max({m_in}, {m_ext}, 0.0)", f"{T} = {T_in_meas} if {m} > 0.0 else {T_in}")
+        c.emit("signals", f"{Q} = {m} * CP * ({T} - {T_in})",
+               f"{c.signal(inst, 'T_ret', 'degC', 'output', 'return temperature the generator receives')} = {T_in}",
+               f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat delivered to the coupling point')} = {Q}",
+               f"{c.ledger_entry(inst, 'fuel')} += {Q} * h",
+               f"{c.ledger_entry(inst, 'heat')} += {Q} * h")
+        return m, T
+
+
+class CircuitKind(ComponentKind):
+    """A heating circuit behind a mixing valve, measured on its building side: flow
+    `<name>.m_flow`, mixed supply `<name>.T_sup` and return `<name>.T_return`. The primary flow it
+    draws follows from the valve's mixing balance at the coupling point's supply temperature:
+    m_primary = m (T_sup - T_return) / (T_supply_header - T_return), within 0 ... m."""
+
+    name = "measured_circuit"
+    role = "consumer"
+
+    def emit_consumer(self, c, inst, T_sup):
+        m = c.signal(inst, "m_flow", "kg/s", "input", "measured building-side flow")
+        T_mix = c.signal(inst, "T_sup", "degC", "input", "measured supply temperature after mixing")
+        T_ret = c.signal(inst, "T_return", "degC", "input", "measured return temperature")
+        mp, Tr, Q = c.var("m_primary"), c.var("T_circ_ret"), c.var("Q_circ")
+        c.emit("hydraulics", f"{Tr} = {T_ret}",
+               f"{mp} = max({m}, 0.0) * min(max(({T_mix} - {Tr}) / ({T_sup} - {Tr}), 0.0), 1.0) "
+               f"if {T_sup} - {Tr} > 0.1 else max({m}, 0.0)")
+        c.emit("signals", f"{Q} = {mp} * CP * ({T_sup} - {Tr})",
+               f"{c.signal(inst, 'm_flow_primary', 'kg/s', 'output', 'primary flow drawn from the coupling point')} = {mp}",
+               f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat taken from the coupling point')} = {Q}",
+               f"{c.ledger_entry(inst, 'building')} += {Q} * h")
+        return mp, Tr
+
+
+class ZoneKind(ComponentKind):
+    """A room whose temperature is measured (`<name>.T_room`, an input to bind): its emitters give
+    their heat against it, its thermostat reads it; the set-point schedule is the zone's."""
+
+    name = "measured_zone"
+    role = "zone"
+
+    @property
+    def Params(self):
+        from ..components.zone import Params
+
+        return Params
+
+    def emit(self, c, inst):
+        from ..components import zone
+
+        x = c.state(inst, np.array([inst.params.T_init]))
+        p = c.param(inst, pack(inst.params))
+        T_room = c.signal(inst, "T_room", "degC", "input", "measured room temperature")
+        T_set = c.var("T_set_room")
+        c.values[f"{inst.name}.T_set"] = T_set
+        c.emit("sense", f"{x}[0] = {T_room}")  # what the emitters see this step
+        c.emit("setpoints", f"{T_set} = {c.module(zone.__name__)}.setpoint({p}, tau)")
+        c.emit("signals", f"{c.signal(inst, 'T_set', 'degC', 'output', 'room set-point (with night reduction)')} = {T_set}")
