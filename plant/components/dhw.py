@@ -52,26 +52,32 @@ class Kind(ComponentKind):
              "hot": (REQUIRED, "height of the hot-water outlet [m]"),
              "cold": (REQUIRED, "height of the cold-water inlet [m]")}
 
-    def emit(self, c, inst):
+    def take(self, c, inst, m_hot_of):
+        """The storage ports of the draw: m_hot_of(p, st, i_out) -> (lines computing the hot-water
+        flow into its first name, that name); returns (p, st, i_out, the heat-to-tap local)."""
         p = c.param(inst, pack(inst.params))
         st = inst.options["storage"]
         ports = c.storage_ports(st)
         i_in = ports.add_inlet(inst, "cold", c.port_layer(inst, "cold", st))
         i_out = ports.add_outlet(inst, "hot", c.port_layer(inst, "hot", st))
-        m_hot, T_tap, Q_miss, Q_dhw = (c.var(v) for v in ("m_hot", "T_tap", "Q_miss", "Q_dhw"))
-        mod = c.module(__name__)
-        c.emit("draws",
-               f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, x_{st}[{st}_out_layer[{i_out}]])",
-               f"{st}_in_m[{i_in}] = {m_hot}",
-               f"{st}_in_T[{i_in}] = {p}[{T_COLD}]",
+        lines, m_hot = m_hot_of(p, st, i_out)
+        Q_dhw = c.var("Q_dhw")
+        c.emit("draws", *lines, f"{st}_in_m[{i_in}] = {m_hot}", f"{st}_in_T[{i_in}] = {p}[{T_COLD}]",
                f"{st}_out_m[{i_out}] = {m_hot}")
+        c.emit("signals", f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{T_COLD}])",
+               f"{c.ledger_entry(inst, 'dhw')} += {Q_dhw} * h")
+        return Q_dhw
+
+    def emit(self, c, inst):
+        m_hot, T_tap, Q_miss = (c.var(v) for v in ("m_hot", "T_tap", "Q_miss"))
+        mod = c.module(__name__)
+        Q_dhw = self.take(c, inst, lambda p, st, i_out: (
+            [f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, x_{st}[{st}_out_layer[{i_out}]])"], m_hot))
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{T_COLD}])",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
                f"{sig('m_flow_hot', 'kg/s', 'hot water taken from the storage')} = {m_hot}",
                f"{sig('T_tap', 'degC', 'temperature delivered at the tap')} = {T_tap}",
                f"{sig('Q_flow', 'W', 'heat delivered to the tap water')} = {Q_dhw}",
                f"{sig('Q_flow_missing', 'W', 'heat missing to reach the tap set temperature')} = {Q_miss}",
-               f"{c.ledger_entry(inst, 'dhw')} += {Q_dhw} * h",
                f"{c.ledger_entry(inst, 'missing')} += {Q_miss} * h")

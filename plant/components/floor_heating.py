@@ -40,8 +40,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, param
 from ..water import CP, RHO
+from . import radiator
 from .radiator import lmtd
 
 STATES = ("T_ret",)
@@ -97,7 +98,7 @@ def step(dt, x, p, m_flow, T_sup, T_room):
     return T_ret, Q
 
 
-class Kind(ComponentKind):
+class Kind(radiator.Kind):
     """Floor heating as the emitter of a mixing station, giving its heat to a zone (link `zone`)."""
 
     name = "floor_heating"
@@ -112,24 +113,9 @@ class Kind(ComponentKind):
     def stored_energy(self, inst, x):
         return capacity(inst.params) * float(x[0])
 
-    def return_state(self, c, inst):
-        """The start-of-step return temperature (the water and screed node)."""
-        if inst.name not in c.x_slices:
-            c.state(inst, self.initial_state(inst))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}[0]"
+    KERNEL = __name__
+    HEAT = "heat emitted by the floor into the zone"
 
-    def emit_emitter(self, c, inst, m_flow, T_sup):
-        self.return_state(c, inst)
-        zone = c.instances[inst.options["zone"]]
-        T_ret, Q = c.var("T_floor_ret"), c.var("Q_floor")
-        mod = c.module(__name__)
-        c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, x_{inst.name}, p_{inst.name}, {m_flow}, {T_sup}, "
-                             f"x_{zone.name}[0])")
-        c.heat_to.setdefault(zone.name, []).append(Q)
-        c.emit("signals",
-               f"{c.signal(inst, 'T_floor', 'degC', 'output', 'water and screed temperature (the return)')} = "
-               f"x_{inst.name}[0]",
-               f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat emitted by the floor into the zone')} = {Q}",
-               f"{c.ledger_entry(inst, 'building')} += {Q} * h")
-        return T_ret
+    def extra_signals(self, c, inst):
+        return [f"{c.signal(inst, 'T_floor', 'degC', 'output', 'water and screed temperature (the return)')} = "
+                f"x_{inst.name}[0]"]

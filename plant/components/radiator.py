@@ -88,8 +88,11 @@ class Kind(ComponentKind):
     def stored_energy(self, inst, x):
         return CP * RHO * inst.params.V_water * float(x[0])
 
+    KERNEL = __name__   # the module whose step(dt, x, p, m_flow, T_sup, T_room) the emitter calls
+    HEAT = "heat emitted by the radiators into the zone"
+
     def return_state(self, c, inst):
-        """The start-of-step return temperature (the water in the radiators)."""
+        """The start-of-step return temperature (the water node)."""
         if inst.name not in c.x_slices:
             c.state(inst, self.initial_state(inst))
             c.param(inst, pack(inst.params))
@@ -98,11 +101,15 @@ class Kind(ComponentKind):
     def emit_emitter(self, c, inst, m_flow, T_sup):
         self.return_state(c, inst)
         zone = c.instances[inst.options["zone"]]
-        T_ret, Q = c.var("T_rad_ret"), c.var("Q_rad")
-        mod = c.module(__name__)
+        T_ret, Q = c.var(f"T_{inst.name}_ret"), c.var(f"Q_{inst.name}")
+        mod = c.module(self.KERNEL)
         c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, x_{inst.name}, p_{inst.name}, {m_flow}, {T_sup}, "
                              f"x_{zone.name}[0])")
         c.heat_to.setdefault(zone.name, []).append(Q)
-        c.emit("signals", f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat emitted by the radiators into the zone')} = {Q}",
+        c.emit("signals", *self.extra_signals(c, inst),
+               f"{c.signal(inst, 'Q_flow', 'W', 'output', self.HEAT)} = {Q}",
                f"{c.ledger_entry(inst, 'building')} += {Q} * h")
         return T_ret
+
+    def extra_signals(self, c, inst) -> list[str]:
+        return []

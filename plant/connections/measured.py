@@ -12,11 +12,10 @@ as heat to the building / to hot water, so a cut closes its energy balance like 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, pack
+from ..components import dhw
 
 
 class ConsumerKind(ComponentKind):
@@ -34,33 +33,16 @@ class ConsumerKind(ComponentKind):
         return mv, Tv
 
 
-@dataclass(frozen=True)
-class DrawParams:
-    T_cold: float = param(10.0, "degC", "cold-water temperature", 1, 30)
+class DrawKind(dhw.Kind):
+    """The hot-water draw with its flow measured (`<name>.m_flow_hot`) instead of the profile."""
 
-
-class DrawKind(ComponentKind):
     name = "measured_draw"
-    Params = DrawParams
-    role = "draw"
-    REFS = {"storage": "storage"}
-    LINKS = {"storage": (REQUIRED, "the storage the hot water is drawn from"),
-             "hot": (REQUIRED, "height of the hot-water outlet [m]"),
-             "cold": (REQUIRED, "height of the cold-water inlet [m]")}
 
     def emit(self, c, inst):
-        p = c.param(inst, pack(inst.params))
-        st = inst.options["storage"]
-        ports = c.storage_ports(st)
-        i_in = ports.add_inlet(inst, "cold", c.port_layer(inst, "cold", st))
-        i_out = ports.add_outlet(inst, "hot", c.port_layer(inst, "hot", st))
         m = c.signal(inst, "m_flow_hot", "kg/s", "input", "measured hot water taken from the storage")
-        mv, Q = c.var("m_hot"), c.var("Q_dhw")
-        c.emit("draws", f"{mv} = max({m}, 0.0)", f"{st}_in_m[{i_in}] = {mv}", f"{st}_in_T[{i_in}] = {p}[0]",
-               f"{st}_out_m[{i_out}] = {mv}")
-        c.emit("signals", f"{Q} = {mv} * CP * ({st}_out_T[{i_out}] - {p}[0])",
-               f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat drawn with the hot water')} = {Q}",
-               f"{c.ledger_entry(inst, 'dhw')} += {Q} * h")
+        mv = c.var("m_hot")
+        Q = self.take(c, inst, lambda p, st, i_out: ([f"{mv} = max({m}, 0.0)"], mv))
+        c.emit("signals", f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat drawn with the hot water')} = {Q}")
 
 
 class GeneratorKind(ComponentKind):
