@@ -23,7 +23,7 @@ from plant.house import load_house
 
 SERVED = {
     "house1_solar": {"solar_station_dhw"},
-    "house2": {"heat_pump_wolf_cha10", "boiler_wolf_cgb20", "solar_station"},
+    "house2": {"heat_pump_wolf_cha10", "boiler_wolf_cgb20", "solar_station", "storage_io_house2"},
     "house3": {"heat_pump_wolf_bws1_10", "solar_station"},
     "house4": {"boiler_wolf_cgb20", "electric_heater"},
     "house5": {"chp_neotower5", "boiler_wolf_cgb50"},
