@@ -35,6 +35,23 @@ def sensors(T, s, first, n_sensors):
 
 
 @njit(cache=True)
+def sensors_at(T, s, first, z):
+    """Write sensor temperatures at relative heights z (0 = bottom, 1 = top), first = sensor 1."""
+    n = T.shape[0]
+    for k in range(z.shape[0]):
+        pos = (1.0 - z[k]) * n - 0.5  # position in layer-centre coordinates, layer 0 = top
+        if pos <= 0.0:
+            v = T[0]
+        elif pos >= n - 1:
+            v = T[n - 1]
+        else:
+            i = int(pos)
+            w = pos - i
+            v = T[i] * (1.0 - w) + T[i + 1] * w
+        s[first + k] = v
+
+
+@njit(cache=True)
 def lag(s, first, x_lag, tau, h, update):
     """Replace sensor signals by first-order filtered ones (time constants tau [s], 0 = none):
     a sensor in a thermowell. Called after `sensors`; the filter advances only when `update`."""
@@ -53,6 +70,8 @@ class Kind(ComponentKind):
     Params = storage.Params
     role = "storage"
     LINKS = {"sensors": (10, "number of temperature sensors at equally spaced heights (1 = bottom)"),
+             "sensor_heights": (None, "relative heights 0 (bottom) ... 1 (top) of the sensors, sensor 1 first "
+                                      "(instead of equally spaced ones)"),
              "sensor_lag": ({}, "sensor number = first-order time constant [s] (an effect: thermowell lag)")}
 
     def initial_state(self, inst):
@@ -78,13 +97,26 @@ class Kind(ComponentKind):
         p = c.param(inst, pack(inst.params))
         n = inst.options["sensors"]
         if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
-            c.problems.append(f"{inst.where} sensors = {n!r}: must be an integer 1 … 100")
+            c.problems.append(f"{inst.at('sensors')} = {n!r}: must be an integer 1 … 100")
             n = 10
+        heights = inst.options.get("sensor_heights")
+        if heights is not None:
+            if (not isinstance(heights, list) or not heights or len(heights) > 100
+                    or any(isinstance(z, bool) or not isinstance(z, (int, float)) or not 0 <= z <= 1 for z in heights)):
+                c.problems.append(f"{inst.at('sensor_heights')} = {heights!r}: a list of relative heights "
+                                  "0 (bottom) … 1 (top), sensor 1 first")
+                heights = None
+            else:
+                n = len(heights)
         first = [c.signal(inst, f"T_sensor_{i}", "degC", "output",
                           f"sensor {i} of {n} (1 = bottom, {n} = top)") for i in range(1, n + 1)][0]
         first = first[2:-1]  # the slot index inside s[...] (resolved at assembly)
         mod = c.module(__name__)
-        c.emit("sense", f"{mod}.sensors({x}, s, {first}, {n})")
+        if heights is None:
+            read = f"{mod}.sensors({x}, s, {first}, {n})"
+        else:
+            read = f"{mod}.sensors_at({x}, s, {first}, {c.param(inst, np.array(heights, dtype=float), suffix='_z')})"
+        c.emit("sense", read)
         lag_call = self._lag(c, inst, n, first)
         if lag_call:
             c.emit("sense", lag_call.format(update="False"))
@@ -93,7 +125,7 @@ class Kind(ComponentKind):
         mean = c.var("mean")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{mod}.sensors({x}, s, {first}, {n})",  # end-of-step values: what the next step's controller sees
+               read,  # end-of-step values: what the next step's controller sees
                *([lag_call.format(update="True")] if lag_call else []),
                f"{mean} = {x}.mean()",
                f"{sig('T_top', 'degC', 'top layer')} = {x}[0]",

@@ -43,6 +43,17 @@ class Samples:
     warnings: list = field(default_factory=list)
     valid: np.ndarray | None = None  # samples usable for scoring (False inside gaps)
     columns: dict = field(default_factory=dict)  # signal -> user column name
+    heights: dict = field(default_factory=dict)  # storage sensor signal -> relative height 0 ... 1
+
+    def sensor_overrides(self) -> dict:
+        """House overrides that put the twin's storage sensors where the recording's are."""
+        out = {}
+        for storage in ("storage", "dhw_storage"):
+            mine = {int(s.rsplit("_", 1)[1]): h for s, h in self.heights.items() if s.startswith(storage + ".")}
+            if mine:
+                n = max(10, max(mine))
+                out[f"{storage}.sensor_heights"] = [mine.get(k, (k - 0.5) / n) for k in range(1, n + 1)]
+        return out
 
     def has(self, name: str) -> bool:
         return name in self.data
@@ -135,11 +146,24 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         warnings.append(f"{int(dup.sum())} duplicate timestamp(s); kept the last row of each")
         raw, t = raw[~dup], t[~dup]
     data = {}
+    heights = {}
+    transforms = rec.meta.get("columns", {}) if mapping is not None else {}
     for col, sig in colmap.items():
         u = units[col]
         cat_unit = CATALOGUE.signal(sig).unit
-        f, off = unit_table.factors(u, cat_unit)
-        v = raw[:, header.index(col)] * f + off
+        tr = transforms.get(col, {})
+        x = raw[:, header.index(col)]
+        if "height" in tr:
+            if not (sig.startswith("storage.T_sensor_") or sig.startswith("dhw_storage.T_sensor_")):
+                raise ConfigError(f"{mapping}: [columns] {col!r} height: only for storage sensors "
+                                  "(storage.T_sensor_N, dhw_storage.T_sensor_N)")
+            heights[sig] = tr["height"]
+        if "range" in tr:
+            a, b, c, d = tr["range"]
+            v = c + (x - a) * (d - c) / (b - a)
+        else:
+            f, off = unit_table.factors(u, cat_unit)
+            v = (x * tr.get("scale", 1.0) + tr.get("offset", 0.0)) * f + off
         lo_hi = PLAUSIBLE.get(cat_unit)
         if lo_hi is not None:
             fin = v[np.isfinite(v)]
@@ -184,7 +208,7 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
             else:
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
     return Samples(str(p), str(start), t, data, warnings, valid,
-                   {sig: col for col, sig in colmap.items()})
+                   {sig: col for col, sig in colmap.items()}, heights)
 
 
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,

@@ -95,6 +95,7 @@ class Replayer:
         # re-fitted nominal parameters (fit.refit_nominal): applied to every run; a run's own
         # overrides take precedence over them
         self.base: dict = {}
+        self.sensors = rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}
 
     def _init_storage(self, house) -> None:
         for comp in ("storage", "dhw_storage"):
@@ -119,7 +120,7 @@ class Replayer:
         """Rows [n_samples, n_signals] (catalogue order) at the recording's sample times."""
         from ..house import load_house
 
-        ov = {**self.base, **(overrides or {})}
+        ov = {**self.sensors, **self.base, **(overrides or {})}
         house = load_house(self.house_name, start=self.rec.start, controller="external",
                            overrides=ov or None)
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))

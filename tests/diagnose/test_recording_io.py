@@ -114,3 +114,45 @@ def test_gateway_recording_directory_is_diagnosed(tmp_path):
     # the replay switches commands between 60 s samples and steps at 5 s: close, not identical
     for i in range(1, 11):
         assert rep["signals"][f"storage.T_sensor_{i}"]["heldout_rmse_before"] < 0.5
+
+
+def test_columns_map_percent_onto_volts_scale_offset_and_sensor_heights(tmp_path, rec):
+    """A boiler command logged in % (range map 0-100 % -> 0-10 V), a temperature logged with a
+    scale and offset, and storage sensors at the lab's own heights."""
+    U = rec.data["boiler.U_set"]
+    extra = {"boiler.U_set": U * 10.0, "chp.T_sup": (rec.data["chp.T_sup"] - 1.0) / 2.0}
+    csv, m = _write(tmp_path, rec, extra=extra)
+    text = m.read_text()
+    text = text.replace('"boiler.U_set" = "boiler.U_set"', '"boiler.U_set" = { signal = "boiler.U_set", range = [0, 100, 0, 10] }')
+    text = text.replace('"chp.T_sup" = "chp.T_sup"', '"chp.T_sup" = { signal = "chp.T_sup", unit = "degC", scale = 2.0, offset = 1.0 }')
+    text = text.replace('"storage.T_sensor_10" = "storage.T_sensor_10"',
+                        '"storage.T_sensor_10" = { signal = "storage.T_sensor_10", height = 0.97 }')
+    text = "\n".join(l for l in text.splitlines() if not l.startswith(('"boiler.U_set" = "V"', '"chp.T_sup" = "degC"')))
+    m.write_text(text + "\n")
+    r = recording_io.load(csv, m)
+    assert np.allclose(r.data["boiler.U_set"], U, atol=1e-6)
+    assert np.allclose(r.data["chp.T_sup"], rec.data["chp.T_sup"], atol=1e-3)
+    ov = r.sensor_overrides()
+    assert ov["storage.sensor_heights"][9] == 0.97 and ov["storage.sensor_heights"][0] == 0.05
+    from plant.house import load_house
+
+    house = load_house("house1", overrides=ov)  # the twin's sensor 10 sits where the lab's does
+    top = house.state("storage")
+    # at 0.97 of 1.63 m in 40 layers: 0.7 of the way from layer 0's centre to layer 1's
+    assert house.get("storage.T_sensor_10") == pytest.approx(top[0] * 0.3 + top[1] * 0.7, abs=1e-9)
+
+
+@pytest.mark.parametrize("entry, needle", [
+    ('{ signal = "storage.T_sensor_1", height = 1.5 }', "height = 1.5: outside 0 … 1"),
+    ('{ signal = "storage.T_sensor_1", range = [0, 0, 0, 10] }', "range = [0, 0, 0, 10]: must be [a, b, c, d] with a != b"),
+    ('{ signal = "storage.T_sensor_1", scael = 2.0 }', "scael: unknown key; did you mean scale"),
+    ('{ signal = "storage.T_sensor_1", range = [0, 100, 0, 10], unit = "K" }', "range maps straight onto the signal's unit"),
+    ('{ signal = "storage.T_sensr_1" }', "unknown signal; did you mean storage.T_sensor_1"),
+])
+def test_bad_column_entries_are_named(tmp_path, rec, entry, needle):
+    csv, m = _write(tmp_path, rec)
+    text = m.read_text().replace('"storage.T_sensor_1" = "storage.T_sensor_1"', f'"storage.T_sensor_1" = {entry}')
+    m.write_text(text)
+    with pytest.raises(ConfigError) as exc:
+        recording_io.load(csv, m)
+    assert needle in str(exc.value) and str(m) in str(exc.value)
