@@ -4,8 +4,9 @@ day: house 2's heat-pump rules scanned over the bus match the same rules built i
 As tests/e2e/test_python_plc.py (conftest.py explains the lock-step alternation, the scan period
 and the recorder interval): the offline reference runs plant/controllers/heat_pump_rules.py with
 `controller.period = SCAN` and `controller.sensor_resolution = 0.1`, so both runs decide on the
-same 0.1 K readings at the same instants. gateway/kpi.py's KPIs need a CHP; house 2's (heat per
-generator, heat-pump electricity, comfort, hot water) are computed here on the same row intervals.
+same 0.1 K readings at the same instants. House 2's KPIs (heat per generator, heat-pump
+electricity, comfort, hot water, plus the meters and switch counts gateway/kpi.py does not report)
+are computed here on the same row intervals as gateway/kpi.py.
 The bus run must hold every commanded input from the first scan on and switch the valve and the
 heat pump both ways.
 """
