@@ -1,7 +1,7 @@
 """Export the native twin of a house as an FMI 2.0 co-simulation FMU (`twin export-fmu`).
 
     from plant.fmu.export import export_house_fmu
-    export_house_fmu("house1", "house1.fmu", start="2021-01-10")
+    export_house_fmu("house1", "house1.fmu", start="2021-01-10")   # any native house: house1 ... house5
 
 How it works: the FMU is built with pythonfmu 0.7.0 (PyPI).  This module writes the source of one
 `Fmi2Slave` subclass with the signal catalogue and the house file baked in at build time, and
@@ -26,9 +26,10 @@ bare `fmpy simulate house1.fmu`).  Workarounds that removed it in every measured
 in the environment.
 
 Variables (FMI names keep the catalogue's dotted names; variableNamingConvention="structured"):
-  inputs      the catalogue's input signals (chp.on, chp.y_set, boiler.U_set, dhw_pump.on,
-              mixer.T_sup_set, mixer.m_flow_set), Real, in the catalogue's units (degC for
-              temperatures - the one unit table, plant/units.py)
+  inputs      the house's input signals (`twin signals HOUSE --inputs`; house 1: chp.on, chp.y_set,
+              boiler.U_set, dhw_pump.on, mixer.T_sup_set, mixer.m_flow_set; house 2: heat_pump.on,
+              heat_pump.y_set, heat_pump.aux, hp_valve.upper, boiler.U_set, solar.on, ...), Real,
+              in the catalogue's units (degC for temperatures - the one unit table, plant/units.py)
   outputs     every output signal of the catalogue, Real, with its catalogue unit
   parameters  start_date (String, ISO date or date-time, default the house file's start or
               --start) and use_builtin_controller (Boolean, default false)
@@ -38,7 +39,7 @@ so fmpy's validation checks them.
 Semantics per instance: at exitInitializationMode the slave assembles
 `House(<baked house file>, start=start_date, controller="external" or "rule_based")`.
 With use_builtin_controller = false (default) every doStep(t, h) first calls house.set(name, u)
-for EVERY input (so the FMU's inputs drive all six commands, including the mixer set-points the
+for EVERY input (so the FMU's inputs drive all commands, including the mixer set-points the
 room thermostat would otherwise give) and then house.step(h) (which splits h into <= 5 s
 internal steps).  With use_builtin_controller = true the inputs are ignored and the house runs
 its rule-based controller and thermostat, as `twin simulate` does.  The house's time 0 is the
@@ -75,9 +76,10 @@ def _fmi_unit_definition(name: str) -> dict[str, float]:
     return d
 
 
-# the catalogue's units, declared in every exported FMU
+# every unit a catalogue may hold a signal in (the code's units, and h of the run-hour counters);
+# an FMU declares those of its own catalogue
 UNIT_DEFINITIONS: dict[str, dict[str, float]] = {
-    u: _fmi_unit_definition(u) for u in ("1", "degC", "K", "kg/s", "W", "W/m2", "J", "V", "h", "s")}
+    u: _fmi_unit_definition(u) for u in dict.fromkeys((*units.CODE_UNITS, "h"))}
 
 SLAVE_TEMPLATE = '''\
 """FMI 2.0 co-simulation slave of the CoSES twin house {house_name!r}.
