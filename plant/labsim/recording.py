@@ -5,11 +5,10 @@
 A recording directory (read by profiles.recording.read_recording):
   * recording.csv: `time` [s since `start` 00:00 local standard time, the logger's stamp with a
     +-0.5 s error], then one column per DAQ tag (COLUMNS), one row every 60 s;
-  * columns.toml: [recording] start and file, [columns] tag -> twin catalogue signal, [units]
-    tag -> unit as the lab logs it (degC as "°C", l/min, kW, %, V, 1); a [sensor_heights_m]
-    table gives the storage sensors' heights (no reader uses it today: the format has no place
-    for a height), CB_CMD_MOD (the boiler command in %, as the PLC holds it) is logged but not
-    mapped, since the format cannot map a % command onto the boiler's 0-10 V input; CB_CMD_U is
+  * columns.toml: [recording] start and file, [columns] tag -> { twin catalogue signal, unit as
+    the lab logs it (degC as "°C", l/min, kW, 1), the storage sensors' relative heights };
+    CB_CMD_MOD (the boiler command in %, as the PLC holds it) maps onto the boiler's 0-10 V input
+    with range = [0, 100, 0, 10]; CB_CMD_U is
     the analogue output card's channel in V;
   * meta.json: the truth (case, effects and their sizes), the expected verdict, the ledger, the
     instrument model and the command that regenerates it.
@@ -22,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from profiles.recording import write_columns, write_csv
+from profiles.recording import write_csv
 
 from .control import L_MIN
 from .house import DHW_SENSOR_HEIGHTS, STORAGE_SENSOR_HEIGHTS, LabHouse
@@ -82,6 +81,29 @@ def _read(h: LabHouse, tag: str, source: str) -> float:
     }[source]
 
 
+STORAGE_HEIGHT_M, DHW_HEIGHT_M = 1.63, 1.51  # the tanks' heights: sensor heights are relative to them
+
+
+def _write_columns(path, start, name):
+    """columns.toml: each DAQ tag onto its twin signal with the unit the lab logs; the storage
+    sensors with their relative heights; the boiler command in % onto 0-10 V (a range map)."""
+    lines = ["# labsim (plant/labsim): lab DAQ tag -> twin catalogue signal, the unit the lab logs,",
+             "# storage sensor heights relative to the tank (0 = bottom, 1 = top)",
+             "[recording]", f'start = "{start}"', f'file = "{name}"', "", "[columns]"]
+    heights = {f"TS_S_TM_BT_{i}": h / STORAGE_HEIGHT_M for i, h in enumerate(STORAGE_SENSOR_HEIGHTS, 1)}
+    heights.update({f"WWS_S_TM_BT_{i}": h / DHW_HEIGHT_M for i, h in DHW_SENSOR_HEIGHTS.items()})
+    for tag, signal, unit, *_ in COLUMNS:
+        if tag == "CB_CMD_MOD":  # the PLC's boiler command, 0-100 %, onto the boiler's 0-10 V input
+            lines.append(f'"{tag}" = {{ signal = "boiler.U_set", range = [0, 100, 0, 10] }}')
+        elif signal is None or tag == "CB_CMD_U":
+            continue  # logged, not mapped (CB_CMD_U: the same command as CB_CMD_MOD)
+        elif tag in heights:
+            lines.append(f'"{tag}" = {{ signal = "{signal}", unit = "{unit}", height = {heights[tag]:.4f} }}')
+        else:
+            lines.append(f'"{tag}" = {{ signal = "{signal}", unit = "{unit}" }}')
+    path.write_text("\n".join(lines) + "\n")
+
+
 def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str, truth: dict,
            command: str | None = None) -> dict:
     """Run `house` for `days` and write recording.csv, columns.toml and meta.json into `out`."""
@@ -113,17 +135,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
     for old in ("recording.csv", "recording.csv.gz"):
         (out / old).unlink(missing_ok=True)
     name = write_csv(out / "recording.csv", t_log, data, ["%.3f"] + [FMT[c[3]] for c in COLUMNS]).name
-    mapped = [c for c in COLUMNS if c[1]]
-    write_columns(out / "columns.toml", {c[0]: c[1] for c in mapped}, {c[0]: c[2] for c in mapped},
-                  start=start, file=name,
-                  comment="labsim (plant/labsim): lab DAQ tag -> twin catalogue signal, and the unit the lab logs")
-    heights = "\n".join(f'"TS_S_TM_BT_{i}" = {h}' for i, h in enumerate(STORAGE_SENSOR_HEIGHTS, 1))
-    dheights = "\n".join(f'"WWS_S_TM_BT_{i}" = {h}' for i, h in DHW_SENSOR_HEIGHTS.items())
-    with open(out / "columns.toml", "a") as fh:
-        fh.write("\n# Not read by profiles/recording.py (the format has no place for them): sensor heights\n"
-                 "# in m above the tank bottom (heating storage 1.63 m, DHW tank 1.51 m tall), and the\n"
-                 "# unmapped boiler command CB_CMD_MOD [%] (0-100 % = 0-10 V on boiler.U_set).\n"
-                 f"[sensor_heights_m]\n{heights}\n{dheights}\n\n[unmapped]\n\"CB_CMD_MOD\" = \"boiler command, %\"\n")
+    _write_columns(out / "columns.toml", start, name)
     ledger = house.closure()
     meta = {**truth, "start": start, "days": days, "seed": seed, "sample_s": SAMPLE_S, "rows": n,
             "file": name, "columns": [c[0] for c in COLUMNS],

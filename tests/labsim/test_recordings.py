@@ -29,10 +29,13 @@ def test_a_day_of_each_case_type_is_readable(case, tmp_path):
     rec = read_recording(tmp_path / case)
     assert rec.start == "2021-01-10" and len(rec.time) == 1440
     assert rec.signals["TS_S_TM_BT_10"] == "storage.T_sensor_10" and rec.units["HK_S_FW_VL"] == "l/min"
-    assert rec.units["CHP_CMD_MOD"] == "%" and "CB_CMD_MOD" in rec.names and "CB_CMD_MOD" not in rec.signals
+    assert rec.units["CHP_CMD_MOD"] == "%" and rec.signals["CB_CMD_MOD"] == "boiler.U_set"  # 0-100 % onto 0-10 V
+    assert "CB_CMD_U" not in rec.signals and rec.meta["columns"]["TS_S_TM_BT_1"]["height"] == pytest.approx(0.12 / 1.63, abs=1e-4)
     assert np.isfinite(rec.values).all()
     s = recording_io.load(tmp_path / case)  # catalogue units
     assert 0.0 <= np.nanmax(s.data["chp.y_set"]) <= 1.0 and np.nanmax(s.data["boiler.U_set"]) <= 10.0
+    assert np.allclose(s.data["boiler.U_set"], rec.column("CB_CMD_U"), atol=0.05)  # the range map gives the V channel
+    assert s.sensor_overrides()["storage.sensor_heights"][0] == pytest.approx(0.12 / 1.63, abs=1e-4)
     assert 10.0 < np.nanmedian(s.data["storage.T_sensor_5"]) < 90.0
     m = json.loads((tmp_path / case / "meta.json").read_text())
     assert m["case"] == case and m["expected"] == CASES[case][2] and m["effects"] == CASES[case][1]
