@@ -16,6 +16,14 @@ from .errors import ConfigError
 HOUSES = Path(__file__).parent / "houses"
 # the CoSES laboratory's names of the five houses (reference §12), accepted wherever a house is named
 ALIASES = {"SF1": "house1", "SF2": "house2", "SF3": "house3", "SF4": "house4", "MF5": "house5"}
+#: TOML files beside the house files that are not houses: <house>_sil.toml, the SiL signal list of
+#: reference §13.1 as a columns file (profiles/recording.py)
+NOT_HOUSES = ("_sil",)
+
+
+def shipped() -> list[str]:
+    """Names of the shipped house files, variants included (not the SiL lists beside them)."""
+    return sorted(f.stem for f in HOUSES.glob("*.toml") if not f.stem.endswith(NOT_HOUSES))
 
 
 def alias_of(name: str) -> str | None:
@@ -31,8 +39,8 @@ def resolve(name_or_path: str | Path) -> Path:
         return p
     name_or_path = ALIASES.get(str(name_or_path).upper(), name_or_path)
     candidate = HOUSES / f"{name_or_path}.toml"
-    if not candidate.exists():
-        known = sorted(f.stem for f in HOUSES.glob("*.toml"))
+    if not candidate.exists() or candidate.stem.endswith(NOT_HOUSES):
+        known = shipped()
         raise ConfigError(f"house {name_or_path!r}: not found; shipped houses: {', '.join(known)} "
                           f"(laboratory names: {', '.join(ALIASES)})")
     return candidate

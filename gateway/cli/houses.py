@@ -49,11 +49,11 @@ def describe(name: str) -> str:
 
 
 def run_list(args) -> int:
-    from plant.housefile import ALIASES, HOUSES
+    from plant.housefile import ALIASES, shipped
 
     names = list(ALIASES.values())
     if args.variants:
-        names += sorted(p.stem for p in HOUSES.glob("*.toml") if p.stem not in names)
+        names += [n for n in shipped() if n not in names]
     for name in names:
         print(describe(name))
     return 0
