@@ -13,7 +13,7 @@ from .components import electric_heater, substation
 
 KINDS = {k.name: k for k in (
     boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
-    mixing_station.Kind(), pipe.Kind(), dhw.Kind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
+    mixing_station.Kind(), pipe.Kind(), dhw.Kind(), dhw.CoilKind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
     measured.ConsumerKind(), measured.DrawKind(), measured.GeneratorKind(), measured.CircuitKind(),
     measured.ZoneKind(),
     rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),

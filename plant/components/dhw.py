@@ -81,3 +81,45 @@ class Kind(ComponentKind):
                f"{sig('Q_flow', 'W', 'heat delivered to the tap water')} = {Q_dhw}",
                f"{sig('Q_flow_missing', 'W', 'heat missing to reach the tap set temperature')} = {Q_miss}",
                f"{c.ledger_entry(inst, 'missing')} += {Q_miss} * h")
+
+
+class CoilKind(Kind):
+    """Hot water heated on its way through a coil in a storage (a fresh-water coil, SF4): cold
+    water enters the coil at the `inlet` height and rises to the `outlet` height; a thermostatic
+    valve after the coil adds cold water down to T_set. The coil flow for this step is set from
+    the outlet temperature of the last one (the valve's position follows what it sees), so the
+    exchange itself stays the storage kernel's exact segment-wise one."""
+
+    name = "dhw_coil_draw"
+    LINKS = {"storage": (REQUIRED, "the storage the coil is in"),
+             "inlet": (REQUIRED, "height of the coil's cold-water inlet [m] (the lower end)"),
+             "outlet": (REQUIRED, "height of the coil's hot-water outlet [m] (the upper end)"),
+             "UA": (2000.0, "coil conductance [W/K] (area x heat-transfer coefficient)")}
+
+    def emit(self, c, inst):
+        p = c.param(inst, pack(inst.params))
+        st = inst.options["storage"]
+        ua = inst.options["UA"]
+        if isinstance(ua, bool) or not isinstance(ua, (int, float)) or not ua > 0:
+            c.problems.append(f"{inst.at('UA')} = {ua!r}: a conductance > 0 W/K")
+            ua = 1.0
+        k = c.storage_ports(st).add_coil(inst, c.port_layer(inst, "inlet", st), c.port_layer(inst, "outlet", st))
+        m, T_out, T_tap, Q, Q_miss = (c.var(v) for v in ("m_coil", "T_coil", "T_tap", "Q_dhw", "Q_miss"))
+        c.emit("draws",
+               f"{T_out} = {st}_coil_Tout[{k}]",  # the last step's outlet: what the valve saw
+               f"{m} = m_draw if {T_out} <= {p}[{T_SET}] else "
+               f"m_draw * ({p}[{T_SET}] - {p}[{T_COLD}]) / ({T_out} - {p}[{T_COLD}])",
+               f"{st}_coil_m[{k}] = {m}", f"{st}_coil_Tin[{k}] = {p}[{T_COLD}]", f"{st}_coil_UA[{k}] = {float(ua)!r}")
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{Q} = {m} * CP * ({st}_coil_Tout[{k}] - {p}[{T_COLD}]) if {m} > 0.0 else 0.0",
+               f"{T_tap} = ({m} * {st}_coil_Tout[{k}] + (m_draw - {m}) * {p}[{T_COLD}]) / m_draw "
+               f"if m_draw > 0.0 else {st}_coil_Tout[{k}]",
+               f"{Q_miss} = max(m_draw * CP * ({p}[{T_SET}] - {p}[{T_COLD}]) - {Q}, 0.0)",
+               f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
+               f"{sig('m_flow_hot', 'kg/s', 'water heated through the coil')} = {m}",
+               f"{sig('T_tap', 'degC', 'temperature delivered at the tap')} = {T_tap}",
+               f"{sig('Q_flow', 'W', 'heat delivered to the tap water')} = {Q}",
+               f"{sig('Q_flow_missing', 'W', 'heat missing to reach the tap set temperature')} = {Q_miss}",
+               f"{c.ledger_entry(inst, 'dhw')} += {Q} * h",
+               f"{c.ledger_entry(inst, 'missing')} += {Q_miss} * h")

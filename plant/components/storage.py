@@ -33,8 +33,9 @@ explicit, energy-conservative finite-volume scheme, split into equal substeps wh
    alpha * A = 0.49 W/K per interface at 10 layers (an effective conductivity of 0.16 W/(m K)).
 4. Losses UA_loss * (T_k - T_env) / N from every layer (spread equally over the layers, as the
    original does; no extra top/bottom weighting).
-5. Coils (internal heat exchangers).  A coil spanning layers top..bot carries fluid entering at
-   its top layer and flowing down; it is modelled as one segment per spanned layer in series,
+5. Coils (internal heat exchangers).  A coil carries fluid from its inlet layer coil_top to its
+   outlet layer coil_bot (downward; upward when coil_top lies below, as fresh water rises through a
+   DHW coil); it is modelled as one segment per spanned layer in series,
    each an exact steady-state exchanger against its layer:
        eps = 1 - exp(-UA_seg / (m CP)),  UA_seg = coil_UA / n_seg,
        Q_seg = m CP eps (theta_in - T_layer),  theta_out = theta_in - eps (theta_in - T_layer),
@@ -212,7 +213,7 @@ def n_substeps(dt, T, p, in_layer, in_m, out_layer, out_m, coil_UA, coil_m, coil
     for c in range(coil_UA.shape[0]):
         m = coil_m[c]
         if m > 0.0 and coil_UA[c] > 0.0:
-            nseg = coil_bot[c] - coil_top[c] + 1
+            nseg = abs(coil_bot[c] - coil_top[c]) + 1
             eps = 1.0 - math.exp(-coil_UA[c] / nseg / (m * CP))
             g += eps * m * CP
     # largest mass leaving one layer per second (ports + interfaces)
@@ -313,11 +314,12 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
             top = coil_top[c]
             bot = coil_bot[c]
             if m > 0.0 and coil_UA[c] > 0.0:
-                nseg = bot - top + 1
+                nseg = abs(bot - top) + 1
                 eps = 1.0 - math.exp(-coil_UA[c] / nseg / (m * CP))
                 mc = m * CP
                 th = coil_Tin[c]
-                for k in range(top, bot + 1):
+                way = 1 if bot >= top else -1  # coil_top is the inlet layer: below the outlet = upward
+                for k in range(top, bot + way, way):
                     dth = eps * (th - T[k])
                     q_layer[k] += mc * dth
                     th -= dth
