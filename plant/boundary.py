@@ -24,7 +24,8 @@ def sample_all(t, tau0, prof):
             sample(pel, st_pel, False, tau), sample(draw, st_draw, False, tau) * RHO, tau)
 
 
-def profiles(typeday: int, household_kwh_per_year: float, dhw_litres_per_day: float) -> tuple:
+def profiles(typeday: int, household_kwh_per_year: float, dhw_litres_per_day: float,
+             dhw_series: str = "SF1") -> tuple:
     """The profile arrays the step samples: ((values...), (steps...))."""
     if typeday:
         td = loaders.typeday(typeday, household_kwh_per_year, dhw_litres_per_day)
@@ -33,7 +34,7 @@ def profiles(typeday: int, household_kwh_per_year: float, dhw_litres_per_day: fl
         w = loaders.weather()
         pres = loaders.presence()
         pel = loaders.electricity(household_kwh_per_year)
-        draw = loaders.hot_water(dhw_litres_per_day)
+        draw = loaders.hot_water(dhw_litres_per_day, dhw_series)
     return ((w["T_air"].values, w["E_dir"].values, w["E_dif"].values, pres.values, pel.values,
              draw.values), (w["T_air"].step, pres.step, pel.step, draw.step))
 

@@ -23,7 +23,7 @@ from .component import REQUIRED, Instance, build_params
 from .errors import ConfigError
 from .housefile import HOUSES, line_of, read, resolve  # noqa: F401 (the names house files are found by)
 HOUSE_KEYS = ("name", "description", "start", "base")
-PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday")
+PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday", "dhw_series")
 # link keys that name other instances, and the role the named instance must have
 PUMP_HINT = {"emitter": "put a mixing station between it and the coupling point",
              "storage": "connect a storage through the point's storage key or a coil"}
@@ -41,6 +41,7 @@ class Declaration:
     instances: dict
     problems: list
     prof: tuple = ()
+    dhw_series: str = "SF1"
 
 
 def _hint(bad: str, names, what: str) -> str:
@@ -84,6 +85,13 @@ def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> De
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= hi:
             problems.append(f"{path}:{line_of(text, 'profiles', key)} [profiles] {key} = {v!r}: "
                             f"must be a number 0 … {hi:g}")
+    from profiles.loaders import DHW_SERIES
+
+    dhw_series = prof.get("dhw_series", "SF1")
+    if dhw_series not in DHW_SERIES:
+        problems.append(f"{path}:{line_of(text, 'profiles', 'dhw_series')} [profiles] dhw_series = "
+                        f"{dhw_series!r}: unknown; the shipped DHWcalc series: {', '.join(DHW_SERIES)}")
+        dhw_series = "SF1"
     instances: dict[str, Instance] = {}
     for order, (name, table) in enumerate(doc.items()):
         if name in ("house", "profiles"):
@@ -138,7 +146,7 @@ def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> De
                        start=str(house.get("start", "2021-01-01")),
                        household_kwh_per_year=float(kwh) if isinstance(kwh, (int, float)) else 0.0,
                        dhw_litres_per_day=float(litres) if isinstance(litres, (int, float)) else 0.0,
-                       typeday=typeday, instances=instances, problems=problems)
+                       typeday=typeday, instances=instances, problems=problems, dhw_series=dhw_series)
     return decl
 
 

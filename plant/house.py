@@ -87,7 +87,7 @@ class House:
         decl = replace(decl, instances={"weather": weather, **{k: v for k, v in decl.instances.items()
                                                               if k != "weather"}},
                        prof=boundary.profiles(decl.typeday, decl.household_kwh_per_year,
-                                              decl.dhw_litres_per_day))
+                                              decl.dhw_litres_per_day, decl.dhw_series))
         self.decl = decl
         plant = compiler.compile_plant(decl)
         plant.module = compiler.load_module(plant.source)

@@ -101,9 +101,15 @@ def electricity(annual_kwh: float) -> Series:
     return Series(base * (annual_kwh / annual), 900.0, False)
 
 
+DHW_SERIES = {"SF1": "SF1_wholeyear_Vdot.txt", "SF2": "SF2_wholeyear_Vdot.txt",
+              "SF3": "SF3_wholeyear_Vdot.txt", "SF4": "SF4_Vdot.txt", "MF5": "MF5_Vdot.txt"}
+
+
 @cache
-def _dhw_minutes() -> np.ndarray:
-    path = HERE / "dhw" / "SF1_wholeyear_Vdot.txt"
+def _dhw_minutes(series: str = "SF1") -> np.ndarray:
+    if series not in DHW_SERIES:
+        raise ConfigError(f"hot-water series {series!r}: unknown; shipped: {', '.join(DHW_SERIES)}")
+    path = HERE / "dhw" / DHW_SERIES[series]
     flows = np.zeros(525600)
     for lineno, line in enumerate(path.read_text().split(), 1):
         try:
@@ -114,9 +120,10 @@ def _dhw_minutes() -> np.ndarray:
     return flows
 
 
-def hot_water(daily_litres: float) -> Series:
-    """Hot-water draw [m3/s] per minute, the SF1 DHWcalc series scaled to daily_litres per day."""
-    lph = _dhw_minutes()
+def hot_water(daily_litres: float, series: str = "SF1") -> Series:
+    """Hot-water draw [m3/s] per minute, a house's DHWcalc series (SF1 ... MF5) scaled to
+    daily_litres per day."""
+    lph = _dhw_minutes(series)
     mean_daily = lph.sum() / 60.0 / 365.0
     return Series(lph * (daily_litres / mean_daily) / 3.6e6, 60.0, False)
 

@@ -98,9 +98,9 @@ def test_python_plc_house2_one_winter_day_matches_the_built_in_rules(tmp_path: P
     assert all(abs(v) <= HEAT_TOLERANCE_PCT for v in diff.values()), diff
     assert run["comfort_occupied_pct"] >= ref["comfort_occupied_pct"] - 0.5
     assert run["dhw_failures"] <= ref["dhw_failures"] and run["dhw_draws"] == ref["dhw_draws"]
-    # the bus really drove the valve and the heat pump both ways (the day has cycles of each),
-    # and every actuator switched as often as under the built-in rules (+-1 cycle)
-    assert run["switches hp_valve.upper"] >= 2 and run["switches heat_pump.on"] >= 2, run
+    # the bus really drove the valve and the heat pump (the day has cycles of each; the valve moves
+    # once on this day), and every actuator switched as often as under the built-in rules (+-1 cycle)
+    assert run["switches hp_valve.upper"] >= 1 and run["switches heat_pump.on"] >= 2, run
     for key in (k for k in run if k.startswith("switches ")):
         assert abs(run[key] - ref[key]) <= 2, (key, run[key], ref[key])
 
