@@ -25,12 +25,12 @@ import dataclasses
 import hmac
 import json
 import logging
-import threading
 from pathlib import Path
 from typing import Any
 
 from aiohttp import web
 
+from gateway.event_loop import ServerThread
 from gateway.faults import KINDS, parse_cli
 from gateway.web import snapshot
 from plant.errors import ConfigError, SignalError, TransportError
@@ -56,11 +56,9 @@ class LiveServer:
         self.history = snapshot.SignalHistory(len(rt.house.catalogue.names))
         for d in rt.devices.values():
             d.subscribe(self.events.add)
-        self._loop: asyncio.AbstractEventLoop | None = None
+        self._server = ServerThread("live-view")
         self._runner: web.AppRunner | None = None
-        self._thread: threading.Thread | None = None
-        self._ready = threading.Event()
-        self._error: BaseException | None = None
+        self._sampler: asyncio.Task | None = None
 
     @property
     def url(self) -> str:
@@ -68,44 +66,23 @@ class LiveServer:
 
     # --------------------------------------------------------------- lifecycle
     def start(self) -> None:
-        self._thread = threading.Thread(target=self._run, name="live-view", daemon=True)
-        self._thread.start()
-        if not self._ready.wait(10):
-            raise TransportError(f"live view {self.host}:{self.port}: did not start within 10 s")
-        if self._error:
-            raise TransportError(f"live view {self.host}:{self.port}: cannot serve ({self._error}); "
-                                 "check the address and that the port is free")
+        self._server.start(self._open, f"live view {self.host}:{self.port}",
+                           "check the address and that the port is free")
 
     def stop(self) -> None:
-        loop = self._loop
-        if loop is None or not loop.is_running():
+        if not self._server.running:
             return
         try:
-            asyncio.run_coroutine_threadsafe(self._runner.cleanup(), loop).result(5)
+            self._server.call(self._close(), 5)
         except Exception:  # stopping anyway
             log.exception("live view: cleanup")
-        loop.call_soon_threadsafe(loop.stop)
-        if self._thread:
-            self._thread.join(5)
+        self._server.stop()
 
-    def _run(self) -> None:
-        loop = asyncio.new_event_loop()
-        self._loop = loop
-        try:
-            loop.run_until_complete(self._open())
-        except BaseException as exc:  # reported to start() in the caller's thread
-            self._error = exc
-            self._ready.set()
-            loop.close()
-            return
-        self._ready.set()
-        sampler = loop.create_task(self._sample())
-        try:
-            loop.run_forever()
-        finally:
-            sampler.cancel()
-            loop.run_until_complete(asyncio.gather(sampler, return_exceptions=True))
-            loop.close()
+    async def _close(self) -> None:
+        if self._sampler is not None:
+            self._sampler.cancel()
+            await asyncio.gather(self._sampler, return_exceptions=True)
+        await self._runner.cleanup()
 
     async def _open(self) -> None:
         app = web.Application()
@@ -125,6 +102,7 @@ class LiveServer:
         site = web.TCPSite(self._runner, self.host, self.port)
         await site.start()
         self.port = self._runner.addresses[0][1]
+        self._sampler = asyncio.get_running_loop().create_task(self._sample())
 
     async def _sample(self) -> None:
         while True:

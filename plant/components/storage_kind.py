@@ -16,39 +16,32 @@ from ..water import CP, RHO
 from . import storage
 
 
+@njit(cache=True, inline="always")
+def _at(T, z):
+    """The temperature at relative height z (0 = bottom, 1 = top), linear between layer centres."""
+    n = T.shape[0]
+    pos = (1.0 - z) * n - 0.5  # position in layer-centre coordinates, layer 0 = top
+    if pos <= 0.0:
+        return T[0]
+    if pos >= n - 1:
+        return T[n - 1]
+    i = int(pos)
+    w = pos - i
+    return T[i] * (1.0 - w) + T[i + 1] * w
+
+
 @njit(cache=True)
 def sensors(T, s, first, n_sensors):
     """Write n_sensors temperatures (1 = bottom ... n = top) at equally spaced heights."""
-    n = T.shape[0]
     for k in range(n_sensors):
-        z = (k + 0.5) / n_sensors  # height fraction of sensor k+1
-        pos = (1.0 - z) * n - 0.5  # position in layer-centre coordinates, layer 0 = top
-        if pos <= 0.0:
-            v = T[0]
-        elif pos >= n - 1:
-            v = T[n - 1]
-        else:
-            i = int(pos)
-            w = pos - i
-            v = T[i] * (1.0 - w) + T[i + 1] * w
-        s[first + k] = v
+        s[first + k] = _at(T, (k + 0.5) / n_sensors)
 
 
 @njit(cache=True)
 def sensors_at(T, s, first, z):
     """Write sensor temperatures at relative heights z (0 = bottom, 1 = top), first = sensor 1."""
-    n = T.shape[0]
     for k in range(z.shape[0]):
-        pos = (1.0 - z[k]) * n - 0.5  # position in layer-centre coordinates, layer 0 = top
-        if pos <= 0.0:
-            v = T[0]
-        elif pos >= n - 1:
-            v = T[n - 1]
-        else:
-            i = int(pos)
-            w = pos - i
-            v = T[i] * (1.0 - w) + T[i + 1] * w
-        s[first + k] = v
+        s[first + k] = _at(T, z[k])
 
 
 @njit(cache=True)
