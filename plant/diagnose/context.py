@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..catalogue import CATALOGUE
+from ..errors import DataError
 from .replay import comparable
 
 # normalisation of residuals per unit, so that one cost adds temperatures, flows and powers
@@ -47,6 +48,13 @@ class Context:
         t_split = t[0] + min(train_days * 86400.0, 0.4 * span)
         train = valid & (t <= t_split)
         held = valid & (t > t_split)
+        h_train = (t_split - t[0]) / 3600.0 - warmup_h
+        h_held = (t[-1] - t_split) / 3600.0
+        if h_train < 2.0 or h_held < 3.0 or train.sum() < 10 or held.sum() < 10:
+            raise DataError(f"{rec.source}: the recording spans {span / 3600.0:.1f} h: too short for a "
+                            f"training and a held-out window (after a {warmup_h:g} h warm-up it needs >= 2 h "
+                            f"to train and >= 3 h held out; it has {max(h_train, 0.0):.1f} h and {h_held:.1f} h); "
+                            "record longer or give a smaller --train-days")
         meas = np.column_stack([rec.data[s] for s in measured])
         ok = np.isfinite(meas) & valid[:, None]
         scale = np.array([SCALE.get(CATALOGUE.signal(s).unit, 1.0) for s in measured])

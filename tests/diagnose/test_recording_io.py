@@ -156,3 +156,11 @@ def test_bad_column_entries_are_named(tmp_path, rec, entry, needle):
     with pytest.raises(ConfigError) as exc:
         recording_io.load(csv, m)
     assert needle in str(exc.value) and str(m) in str(exc.value)
+
+
+def test_a_recording_too_short_for_a_held_out_window_says_so():
+    from plant.diagnose import diagnose
+
+    short = synth.make("none", days=0.2, noise=False)  # 4.8 h: no room for 1 + 2 + 3 h
+    with pytest.raises(DataError, match=r"spans 4\.8 h: too short for a training and a held-out window"):
+        diagnose(short, train_days=0.1, log=lambda *a: None, plots=False)
