@@ -99,8 +99,6 @@ class Context:
         self.values: dict[str, str] = {}              # "instance.quantity" -> local of this step
         self.energy: list = []                        # (instance, fn(x, params) -> J)
         self.failed: set[str] = set()              # instances whose links were reported bad
-        self.n_x = 0
-        self.n_p = 0
         self._n_var = 0
 
     # --- code ----------------------------------------------------------------------------
@@ -123,23 +121,18 @@ class Context:
     def state(self, inst: Instance, x0: np.ndarray, suffix: str = "") -> str:
         """Allocate the instance's state vector (a second one with a suffix); returns the name of
         its view in the step."""
-        a = self.n_x
-        x0 = np.ascontiguousarray(x0, dtype=np.float64)
-        self.n_x += len(x0)
-        self.x0.append(x0)
-        self.x_slices[inst.name + suffix] = (a, self.n_x)
-        view = f"x_{inst.name}{suffix}"
-        self.header.append(f"{view} = x[{a}:{self.n_x}]")
-        return view
+        return self._slot("x", self.x0, self.x_slices, inst.name + suffix, x0)
 
     def param(self, inst: Instance, values: np.ndarray, suffix: str = "") -> str:
-        a = self.n_p
+        return self._slot("p", self.p0, self.p_slices, inst.name + suffix, values)
+
+    def _slot(self, array: str, chunks: list, slices: dict, key: str, values) -> str:
+        a = sum(len(v) for v in chunks)
         values = np.ascontiguousarray(values, dtype=np.float64)
-        self.n_p += len(values)
-        self.p0.append(values)
-        self.p_slices[inst.name + suffix] = (a, self.n_p)
-        view = f"p_{inst.name}{suffix}"
-        self.header.append(f"{view} = p[{a}:{self.n_p}]")
+        chunks.append(values)
+        slices[key] = (a, a + len(values))
+        view = f"{array}_{key}"
+        self.header.append(f"{view} = {array}[{a}:{a + len(values)}]")
         return view
 
     def table(self, array: np.ndarray) -> str:

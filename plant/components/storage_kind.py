@@ -76,7 +76,7 @@ class Kind(ComponentKind):
     def emit(self, c, inst):
         x, p, Ql = self.emit_signals(c, inst)
         Qc = c.var("Q_coil")
-        c.values[f"{inst.name}.Q_coil"] = Qc
+        inst.q_coil = Qc
         a = inst.name
         smod = c.module(storage.__name__)
         c.emit("storages", f"{Ql}, {Qc} = {smod}.step(h, {x}, {p}, {a}_in_layer, {a}_in_m, {a}_in_T, "
@@ -150,8 +150,13 @@ class Kind(ComponentKind):
         return f"{c.module(__name__)}.lag(s, {first}, {x_lag}, {p_lag}, h, {{update}})"
 
     def allocate(self, c, inst, ports):
-        """The port arrays, once every connection has asked for its slots."""
+        """The port arrays, once every connection has asked for its slots; and each coil's heat
+        (`<storage>_coil_Q_<k>`): the kernel's own sum when the coil is the only one, else from
+        the coil's flow and temperatures."""
         a = inst.name
+        for k in range(ports.n_coil):
+            q = getattr(inst, "q_coil", None) if ports.n_coil == 1 else None
+            c.emit("storages", f"{a}_coil_Q_{k} = " + (q or f"{a}_coil_m[{k}] * CP * ({a}_coil_Tin[{k}] - {a}_coil_Tout[{k}])"))
         in_layer = np.zeros(ports.n_in, dtype=np.int64)
         for slot, layer in ports.fixed_in:
             in_layer[slot] = layer

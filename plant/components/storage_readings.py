@@ -27,6 +27,7 @@ from numba import njit
 
 from ..water import CP, RHO
 from .storage import Params
+from .storage_kind import sensors
 
 SOC_BUFFER = (40.0, 80.0)  # T_0, T_max [degC] of the house-1 buffer controller SOC
 SOC_DHW = (15.0, 80.0)  # T_0, T_max [degC] of the house-1 DHW-tank SOC (SF1.mo)
@@ -46,24 +47,9 @@ def stored_energy(T, params: Params, T_ref: float) -> float:
 
 @njit(cache=True)
 def sensor_temperatures_into(T, out):
-    """Fill out[i] with the temperature at sensor i+1 of len(out) equally spaced sensors.
-
-    Sensor 1 (out[0]) is the lowest at height H/(2n), sensor n the highest; linear interpolation
-    between layer centres (layer k centre at 1 - (k + 0.5)/N of the height), clamped at the ends.
-    """
-    N = T.shape[0]
-    n = out.shape[0]
-    for i in range(n):
-        z = (i + 0.5) / n  # fraction of the height above the bottom
-        x = (1.0 - z) * N - 0.5  # position in layer-index coordinates (0 = top centre)
-        if x <= 0.0:
-            out[i] = T[0]
-        elif x >= N - 1:
-            out[i] = T[N - 1]
-        else:
-            k = int(x)
-            w = x - k
-            out[i] = (1.0 - w) * T[k] + w * T[k + 1]
+    """Fill out[i] with the temperature at sensor i+1 of len(out) equally spaced sensors (sensor 1
+    = out[0] the lowest, at H/(2n)): the readings the compiled step writes (storage_kind.sensors)."""
+    sensors(T, out, 0, out.shape[0])
     return out
 
 

@@ -47,8 +47,7 @@ class Kind(ComponentKind):
                f"{st}_coil_m[{k}] = {m}",
                f"{st}_coil_Tin[{k}] = {T_sup}",
                f"{st}_coil_UA[{k}] = {p}[{UA}]")
-        Q = c.values.get(f"{st}.Q_coil") if c.storage_ports(st).n_coil == 1 else None
-        Q = Q or f"{m} * CP * ({st}_coil_Tin[{k}] - {st}_coil_Tout[{k}])"
+        Q = f"{st}_coil_Q_{k}"  # the storage says, once it knows all its coils (storage_kind.allocate)
         c.emit("signals",
                f"{c.signal(inst, 'm_flow', 'kg/s', 'output', 'charging flow through the coil')} = {m}",
                f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat given by the coil to the storage')} = {Q}")

@@ -163,6 +163,10 @@ class Kind(ComponentKind):
         sol = c.float_array(net.N_SOL)
         mod = c.module(net.__name__)
         first, second = gens
+        if not hasattr(c.kinds[second.kind], "emit_pump_request"):
+            c.problems.append(f"{inst.at('generators')}: pressure_driven hydraulics need a second generator "
+                              f"whose own pump the header can overrun (a chp); {second.name} is a {second.kind}")
+            return []
         m_b, T_b = c.kinds[first.kind].emit_generator(c, first, T_rh, "0.0")
         m_pump = c.kinds[second.kind].emit_pump_request(c, second, T_rh)
         forced = c.var("m_forced")

@@ -215,3 +215,11 @@ storage_bottom = 0.15
     L = house.ledger()
     assert L["closure"] < 1e-9 and L["heat_building"] > 0 and L["heat_chp"] > 0
     assert house.get("zone.T_room") > 17.0
+
+
+def test_pressure_driven_hydraulics_name_a_generator_they_cannot_overrun(tmp_path):
+    text = (HOUSES / "house1_truth.toml").read_text().replace('base = "house1"', f'base = "{HOUSES / "house1.toml"}"')
+    path = _write(tmp_path, text.replace('hydraulics = "pressure_driven"',
+                                         'hydraulics = "pressure_driven"\ngenerators = ["chp", "boiler"]'), "pd.toml")
+    with pytest.raises(ConfigError, match=r"\[switch\] generators: pressure_driven hydraulics need a second generator .* boiler is a boiler"):
+        load_house(path)
