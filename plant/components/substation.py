@@ -48,7 +48,9 @@ CHN_S_FW_TG_set), `T_grid_sup`, `T_grid_ret` (degC; the kind writes the paramete
 unless driven from outside; CHN_S_TM_TG is the one of them that enters the exchanger).
 Outputs: `m_flow`, `T_sup` (house supply-header side), `T_ret` (return-header side),
 `m_flow_grid`, `T_grid_in`, `T_grid_out`, `Q_flow`, `epsilon`, `E_extracted`, `E_fed_in`
-(heat meters, J, both >= 0).
+(heat meters, J, both >= 0), `M_extracted`, `M_fed_in` (the meters' water counters, kg of grid
+water through the exchanger, both >= 0: with the heat meters they give a district grid the exact
+mass and enthalpy a house exchanged over an exchange step).
 Ledger: extracted heat is "fuel" (energy into the house) and "heat" (into its water), so the
 substation has no generator losses; heat fed in leaves the water as "building" (an export, like
 the heat a consumer takes; key building_<name>).
@@ -91,8 +93,8 @@ class Params:
 
 
 UA, EPSILON, M_FLOW_MAX, M_FLOW_GRID_MAX, T_GRID_SUP, T_GRID_RET = range(6)
-STATES = ("E_extracted", "E_fed_in")
-X_E_EXTRACTED, X_E_FED_IN = range(2)
+STATES = ("E_extracted", "E_fed_in", "M_extracted", "M_fed_in")
+X_E_EXTRACTED, X_E_FED_IN, X_M_EXTRACTED, X_M_FED_IN = range(4)
 
 
 
@@ -219,6 +221,8 @@ class Kind(ComponentKind):
         c.emit("signals", *lines,
                f"{x}[{X_E_EXTRACTED}] += max({Q}, 0.0) * h",
                f"{x}[{X_E_FED_IN}] += max(-{Q}, 0.0) * h",
+               f"{x}[{X_M_EXTRACTED}] += {mg_g} * h",
+               f"{x}[{X_M_FED_IN}] += {mg_c} * h",
                f"{sig('m_flow', 'kg/s', 'house-side flow (+ extraction from the grid, - feed-in)')} = {m_g} - {m_c}",
                f"{sig('T_sup', 'degC', 'house side at the supply header (outlet when extracting, inlet when feeding in)')} = "
                f"{Tin_c} if {fed} else {Tout_g}",
@@ -231,4 +235,8 @@ class Kind(ComponentKind):
                f"{sig('Q_flow', 'W', 'heat into the house (+ extraction, - feed-in)')} = {Q}",
                f"{sig('epsilon', '1', 'exchanger effectiveness this step (0 without flow)')} = {eps_c} if {fed} else {eps_g}",
                f"{sig('E_extracted', 'J', 'heat meter: heat taken from the grid since the start')} = {x}[{X_E_EXTRACTED}]",
-               f"{sig('E_fed_in', 'J', 'heat meter: heat given to the grid since the start')} = {x}[{X_E_FED_IN}]")
+               f"{sig('E_fed_in', 'J', 'heat meter: heat given to the grid since the start')} = {x}[{X_E_FED_IN}]",
+               f"{sig('M_extracted', 'kg', 'heat meter: grid water through the exchanger while extracting')} = "
+               f"{x}[{X_M_EXTRACTED}]",
+               f"{sig('M_fed_in', 'kg', 'heat meter: grid water through the exchanger while feeding in')} = "
+               f"{x}[{X_M_FED_IN}]")
