@@ -1,0 +1,114 @@
+"""The one adapter to the co-simulation engine, HELICS (docs/district.md says why HELICS): a broker,
+value federates, vector publications and subscriptions, time requests. No other module imports
+helics, so a change of engine touches this file only.
+
+Timing contract of the district: a house granted time t reads the grid's temperatures, steps to
+t + step, publishes what it exchanged over [t, t + step] (stamped t) and requests t + step; the
+grid runs at t + OFFSET: granted then, it has every house's exchange over [t, t + step], steps its
+pipes over the same interval and publishes the temperatures for the next one, which every house
+sees when granted t + step. Federates are uninterruptible: a value arriving does not grant an
+earlier time than requested.
+"""
+from __future__ import annotations
+
+import socket
+
+OFFSET = 1e-3  # s: the grid's grants trail the houses' by this much
+
+
+def _h():
+    import helics
+
+    return helics
+
+
+class Broker:
+    """A HELICS broker in this process, listening on host:port for `federates` federates."""
+
+    def __init__(self, federates: int, host: str = "127.0.0.1", port: int | None = None, name: str = "district"):
+        h = _h()
+        self.host, self.port = host, port or free_port(host)
+        self._b = h.helicsCreateBroker("zmq", name, f"--federates={federates} --local_interface=tcp://{host} "
+                                                    f"--port={self.port}")
+
+    @property
+    def address(self) -> str:
+        host = "127.0.0.1" if self.host in ("0.0.0.0", "*") else self.host
+        return f"tcp://{host}:{self.port}"
+
+    def connected(self) -> bool:
+        return bool(_h().helicsBrokerIsConnected(self._b))
+
+    def close(self, wait_ms: int = 2000) -> None:
+        h = _h()
+        if not h.helicsBrokerWaitForDisconnect(self._b, wait_ms):
+            h.helicsBrokerDisconnect(self._b)
+        h.helicsBrokerFree(self._b)
+
+
+class Federate:
+    """A value federate joined to the broker at `broker` (tcp://host:port)."""
+
+    def __init__(self, name: str, broker: str, period: float, offset: float = 0.0):
+        h = _h()
+        info = h.helicsCreateFederateInfo()
+        h.helicsFederateInfoSetCoreTypeFromString(info, "zmq")
+        host_port = broker.removeprefix("tcp://")
+        h.helicsFederateInfoSetCoreInitString(info, f"--federates=1 --broker_address=tcp://{host_port}")
+        h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_PERIOD, period)
+        if offset:
+            h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_OFFSET, offset)
+        h.helicsFederateInfoSetFlagOption(info, h.HELICS_FLAG_UNINTERRUPTIBLE, True)
+        h.helicsFederateInfoSetFlagOption(info, h.HELICS_FLAG_TERMINATE_ON_ERROR, True)
+        self.name = name
+        self._f = h.helicsCreateValueFederate(name, info)
+        h.helicsFederateInfoFree(info)
+
+    def publication(self, key: str, units: str = ""):
+        return _h().helicsFederateRegisterGlobalTypePublication(self._f, key, "vector", units)
+
+    def subscription(self, key: str, units: str = ""):
+        return _h().helicsFederateRegisterSubscription(self._f, key, units)
+
+    def initialize(self) -> None:
+        """Initializing mode: values published now are what the others read at time 0."""
+        _h().helicsFederateEnterInitializingMode(self._f)
+
+    def start(self) -> None:
+        _h().helicsFederateEnterExecutingMode(self._f)
+
+    def request(self, t: float) -> float:
+        return _h().helicsFederateRequestTime(self._f, t)
+
+    @staticmethod
+    def publish(pub, values) -> None:
+        _h().helicsPublicationPublishVector(pub, [float(v) for v in values])
+
+    @staticmethod
+    def read(sub) -> list[float]:
+        return list(_h().helicsInputGetVector(sub))
+
+    def close(self) -> None:
+        h = _h()
+        h.helicsFederateDisconnect(self._f)
+        h.helicsFederateFree(self._f)
+
+
+def free_port(host: str = "127.0.0.1") -> int:
+    """A port whose successor is free too (the zmq broker binds port and port + 1)."""
+    for _ in range(50):
+        with socket.socket() as s:
+            s.bind((host, 0))
+            port = s.getsockname()[1]
+        try:
+            with socket.socket() as s:
+                s.bind((host, port + 1))
+            return port
+        except OSError:
+            continue
+    raise OSError(f"no free pair of ports on {host}")
+
+
+def keys(district: str, house: str) -> tuple[str, str]:
+    """(what the house publishes, what the grid publishes to it)."""
+    return f"{district}/{house}/exchange", f"{district}/grid/{house}"
