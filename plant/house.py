@@ -26,7 +26,7 @@ from .errors import ConfigError
 from .schedule import n_steps
 
 CONTROLLERS = ("rule_based", "external")
-SUPERVISORY = ("rule_based", "heat_pump_rules", "soc_rules")  # whose commands "external" hands to the gateway
+SUPERVISORY = ("rule_based", "heat_pump_rules", "soc_rules", "substation_rules")  # whose commands "external" hands to the gateway
 
 
 @dataclass(frozen=True)

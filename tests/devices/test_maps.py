@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from pathlib import Path
 
 import pytest
@@ -31,7 +32,8 @@ def test_all_maps_are_shipped():
     assert set(MAPS) == {"chp_neotower2", "boiler_wolf_cgb", "mixing_station", "storage_io",
                          "dhw_station", "heat_pump_wolf_cha10", "heat_pump_wolf_bws1_10",
                          "boiler_wolf_cgb20", "boiler_wolf_cgb50", "chp_neotower5", "solar_station",
-                         "solar_station_dhw", "electric_heater", "district_substation", "storage_io_house2"}
+                         "solar_station_dhw", "electric_heater", "district_substation", "storage_io_house2",
+                         "heat_pump_wolf_cha10_house1"}
 
 
 SHIPPED_HOUSES = sorted({h for m in MAPS.values() for h in served(m) if (HOUSES / f"{h}.toml").exists()})
@@ -49,15 +51,23 @@ def test_maps_lint_clean_against_each_house_they_serve(house):
                                for p in problems)
 
 
-def test_a_map_for_a_house_not_shipped_is_a_note():
-    """The substation serves the house-1 variant with a substation, which no house file ships:
-    lint against house 1 notes it and checks the rest."""
-    assert not (HOUSES / "house1_substation.toml").exists()
-    problems = lint_map(MAPS["district_substation"], None, "house1")
-    assert problems == []                                            # no catalogue: no binding check
+def test_a_map_for_a_house_not_shipped_is_a_note(tmp_path: Path):
+    """A map may name a house no file ships: lint against house 1 notes it and checks the rest."""
+    assert not (HOUSES / "house9.toml").exists()
+    path = tmp_path / "district_substation.toml"
+    path.write_text(re.sub(r'(?m)^house = ".*"$', 'house = "house9"',
+                           (DEVICES_DIR / "district_substation.toml").read_text()))
+    dmap = load_map(path)
+    assert lint_map(dmap, None, "house1") == []                      # no catalogue: no binding check
     from plant.house import load_house
-    notes = lint_map(MAPS["district_substation"], load_house("house1").catalogue, "house1")
-    assert [p.level for p in notes] == ["note"] and "house1_substation" in notes[0].text
+    notes = lint_map(dmap, load_house("house1").catalogue, "house1")
+    assert [p.level for p in notes] == ["note"] and "house9" in notes[0].text
+
+
+def test_every_house_serves_its_substation_and_house1_heat_pump_its_heat_pump():
+    assert {"house1", "house2", "house3", "house4", "house5"} <= set(served(MAPS["district_substation"]))
+    assert served(MAPS["heat_pump_wolf_cha10_house1"]) == ["house1_heat_pump"]
+    assert "house1_heat_pump" in SHIPPED_HOUSES
 
 
 def test_maps_lint_clean_against_house1(catalogue):

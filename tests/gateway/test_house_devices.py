@@ -1,8 +1,9 @@
 """The devices of houses 2-5 and of the house-1 variants, served by the runtime in lock-step:
 each house gets exactly the maps that name it and every point reads its live plant value; the
 CHA-10 refuses an out-of-range modulation on Modbus (exception 03) and CANopen (SDO abort) while
-the plant keeps stepping; a district-heating substation in a house-1 variant is commanded over
-CANopen (python-can virtual bus) and its flows, heat and heat meters respond, in both directions."""
+the plant keeps stepping; house 1's district-heating substation (every house declares one) is
+commanded over CANopen (python-can virtual bus) and its flows, heat and heat meters respond, in
+both directions."""
 from __future__ import annotations
 
 import uuid
@@ -18,29 +19,18 @@ from gateway.maps import codec
 from gateway.runtime import Runtime
 from gateway.transports.can_bus import open_bus
 from gateway.transports.canopen_od import build_object_dictionary
-from plant.declaration import HOUSES
 from plant.house import load_house
 
 SERVED = {
     "house1_solar": {"solar_station_dhw"},
-    "house2": {"heat_pump_wolf_cha10", "boiler_wolf_cgb20", "solar_station", "storage_io_house2"},
-    "house3": {"heat_pump_wolf_bws1_10", "solar_station"},
-    "house4": {"boiler_wolf_cgb20", "electric_heater"},
-    "house5": {"chp_neotower5", "boiler_wolf_cgb50"},
+    "house1_heat_pump": {"heat_pump_wolf_cha10_house1", "chp_neotower2", "mixing_station", "dhw_station",
+                         "district_substation"},
+    "house2": {"heat_pump_wolf_cha10", "boiler_wolf_cgb20", "solar_station", "storage_io_house2",
+               "district_substation"},
+    "house3": {"heat_pump_wolf_bws1_10", "solar_station", "district_substation"},
+    "house4": {"boiler_wolf_cgb20", "electric_heater", "district_substation"},
+    "house5": {"chp_neotower5", "boiler_wolf_cgb50", "district_substation"},
 }
-
-SUBSTATION_VARIANT = '''
-[house]
-name = "house1_substation"
-base = "{base}"
-
-[substation]
-kind = "substation"
-
-[switch]
-generators = ["boiler", "chp", "substation"]
-consumers = ["mixer", "dhw_pump", "substation"]
-'''
 
 
 @pytest.mark.parametrize("house", sorted(SERVED))
@@ -122,11 +112,9 @@ def test_out_of_range_modulation_is_refused_on_both_buses_while_the_plant_steps(
 
 
 @pytest.fixture
-def substation_house(tmp_path):
-    path = tmp_path / "house1_substation.toml"
-    path.write_text(SUBSTATION_VARIANT.format(base=HOUSES / "house1.toml"))
+def substation_house():
     bus = f"virtual:dh-{uuid.uuid4().hex[:8]}"
-    rt = Runtime(load_house(path, start="2021-01-10", controller="external"), clock=LockStepClock(10.0))
+    rt = Runtime(load_house("house1", start="2021-01-10", controller="external"), clock=LockStepClock(10.0))
     rt.add_canopen(bus)
     rt.start()
     master = canopen.Network(open_bus(bus))
@@ -141,7 +129,7 @@ def substation_house(tmp_path):
 
 def test_substation_commanded_over_canopen_extracts_and_feeds_in(substation_house):
     rt, node = substation_house
-    assert rt.house.name == "house1_substation" and set(rt.devices) == {"district_substation"}
+    assert rt.house.name == "house1" and "district_substation" in rt.devices
     rt.house.set("boiler.U_set", 0.0)                                  # the substation heats alone
     rt.house.set("chp.on", 0.0)
     cmd, meas, meter = node.sdo["commands"], node.sdo["measurements"], node.sdo["counters"]

@@ -23,8 +23,9 @@ def _line(path, needle):
 
 def test_every_bad_declaration_is_reported_at_once(tmp_path):
     text = (HOUSE1
-            .replace('consumers = ["mixer", "dhw_pump"]', 'consumers = ["mixer", "dhw_pump", "radiator"]')  # no pump
-            .replace('generators = ["boiler", "chp"]', 'generators = ["boiler", "chp", "chp"]')  # twice
+            .replace('consumers = ["mixer", "dhw_pump", "substation"]  # substation: feed-in (§8.2)',
+                     'consumers = ["mixer", "dhw_pump", "substation", "radiator"]')  # no pump
+            .replace('generators = ["boiler", "chp", "substation"]', 'generators = ["boiler", "chp", "chp", "substation"]')  # twice
             .replace("hot = 1.48", "hot = 2.48")  # above the DHW storage top (1.51 m)
             .replace('T_top = "storage.T_sensor_10"', 'T_top = "storage.T_sensor_11"')  # no such signal
             .replace('kind = "zone"', 'kind = "zonee"')  # unknown kind
@@ -33,7 +34,7 @@ def test_every_bad_declaration_is_reported_at_once(tmp_path):
     with pytest.raises(ConfigError) as exc:
         load_house(path)
     msg = str(exc.value)
-    consumers = _line(path, 'consumers = ["mixer", "dhw_pump", "radiator"]')
+    consumers = _line(path, 'consumers = ["mixer", "dhw_pump", "substation", "radiator"]')
     zone = _line(path, 'kind = "zonee"')
     expected = [
         (f"bad.toml:{consumers} [switch] consumers = 'radiator'", "has no pump of its own"),
@@ -219,7 +220,6 @@ storage_bottom = 0.15
 
 def test_pressure_driven_hydraulics_name_a_generator_they_cannot_overrun(tmp_path):
     text = (HOUSES / "house1_truth.toml").read_text().replace('base = "house1"', f'base = "{HOUSES / "house1.toml"}"')
-    path = _write(tmp_path, text.replace('hydraulics = "pressure_driven"',
-                                         'hydraulics = "pressure_driven"\ngenerators = ["chp", "boiler"]'), "pd.toml")
+    path = _write(tmp_path, text.replace('generators = ["boiler", "chp"]', 'generators = ["chp", "boiler"]'), "pd.toml")
     with pytest.raises(ConfigError, match=r"\[switch\] generators: pressure_driven hydraulics need a second generator .* boiler is a boiler"):
         load_house(path)

@@ -36,6 +36,10 @@ COMMANDS = {
     "house4": {"EB_EB_power_kW_set": "boiler.U_set"},
     "house5": {"CHP_CHPon_off": "chp.on", "CHP_elPowerCHP_set": "chp.y_set", "EB_EB_power_kW_set": "boiler.U_set"},
 }
+#: every house's district-heating substation (§13.1 CHN_*)
+for _commands in COMMANDS.values():
+    _commands.update({"CHN_S_FW_HC_set": "substation.m_flow_set", "CHN_S_FW_TG_set": "substation.m_flow_grid_set",
+                      "CHN_S_TM_TG": "substation.T_grid_sup"})
 
 
 @pytest.mark.parametrize("house", list(COMMANDS))

@@ -151,6 +151,7 @@ def test_extraction_only_on_a_branch(tmp_path):
     a negative set-point moves nothing there (no consumer side)."""
     text = DH.format(base=HOUSES / "house1.toml", extra="").replace(
         '[switch]\ngenerators = ["boiler", "chp", "substation"]\nconsumers = ["mixer", "dhw_pump", "substation"]\n',
+        '[switch]\ngenerators = ["boiler", "chp"]\nconsumers = ["mixer", "dhw_pump"]\n\n'  # off house 1's switch
         '[dh_branch]\nkind = "branch"\ngenerator = "substation"\nstorage = "storage"\nsupply = 1.5\nreturn = 0.1\n')
     path = tmp_path / "branch.toml"
     path.write_text(text)

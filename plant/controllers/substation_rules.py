@@ -1,0 +1,137 @@
+"""The district-heating substation's rules: extract heat from the grid when the storage runs
+cold, feed heat in when it runs hot (the lab's CHN_S_FW_HC_set / CHN_S_FW_TG_set, reference §8.1,
+§13.1), switched off by default so that a house run alone behaves as without a substation.
+
+Upstream has no built-in substation controller: the SiL exposes only the substation's flows
+(§13.1) and the house models' "standard control" covers the generators alone (§12). These rules
+are the twin's, and their thresholds are stated assumptions in each house's .md. Two
+edge-triggered hysteresis switches, as every built-in controller (§12):
+
+  extraction   on when T_top < T_extract_on, off when T_top > T_extract_off
+  feed-in      on when T_upper > T_feed_on, off when T_upper < T_feed_off
+               (never while extracting: extraction wins when both would hold)
+
+T_top and T_upper are whichever signals the house links (the storage's top sensor and an upper
+sensor). Outputs, in the substation's sign convention (plant/components/substation.py: + extraction,
+- feed-in): m_flow_set = +m_flow_extract, -m_flow_feed or 0, and m_flow_grid_set = m_flow_grid
+while either runs, else 0. With `active = 0` (the default) both outputs are 0 and the states stay
+0: the substation moves nothing. A district switches it on with the override
+{"substation_control.active": 1}; an output driven from outside (gateway, bind) is not written.
+The states are also the controller's output signals (`<name>.extracting`, `<name>.feeding_in`).
+
+Parameters
+----------
+| name | unit | meaning |
+|---|---|---|
+| active | 1 | 0: outputs 0 (a house alone); 1: the rules run |
+| T_extract_on, T_extract_off | degC | extraction starts below / stops above (T_top) |
+| T_feed_on, T_feed_off | degC | feed-in starts above / stops below (T_upper) |
+| m_flow_extract, m_flow_feed | kg/s | house-side flow while extracting / feeding in (magnitudes) |
+| m_flow_grid | kg/s | grid-side flow while either runs |
+| period, sensor_resolution | s, K | scan period and the sensor resolution the rules see |
+
+Tests: tests/plant/test_substation_rules.py (inactive: house 1 unchanged; active with a 70 degC
+grid: a cold house extracts and the ledger closes; a hot storage feeds in; hysteresis).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from .rule_based import quantize
+
+STATES = ("extracting", "feeding_in", "since_scan")
+X_EXTRACT, X_FEED, X_SINCE = range(3)
+
+
+@dataclass(frozen=True)
+class Params:
+    active: int = param(0, "1", "0: the substation moves nothing (a house alone); 1: the rules run", 0, 1)
+    T_extract_on: float = param(55.0, "degC", "extraction starts when T_top is below", 10, 95)
+    T_extract_off: float = param(60.0, "degC", "extraction stops when T_top is above", 10, 95)
+    T_feed_on: float = param(75.0, "degC", "feed-in starts when T_upper is above", 10, 99)
+    T_feed_off: float = param(70.0, "degC", "feed-in stops when T_upper is below", 10, 99)
+    m_flow_extract: float = param(0.15, "kg/s", "house-side flow while extracting", 0.0, 100.0)
+    m_flow_feed: float = param(0.15, "kg/s", "house-side flow while feeding in", 0.0, 100.0)
+    m_flow_grid: float = param(0.20, "kg/s", "grid-side flow while extracting or feeding in", 0.0, 100.0)
+    period: float = param(1.0, "s", "scan period: the rules are evaluated this often", 0.0, 3600.0)
+    sensor_resolution: float = param(0.0, "K", "sensor resolution the rules see (0: exact)", 0.0, 5.0)
+
+
+(ACTIVE, T_EXTRACT_ON, T_EXTRACT_OFF, T_FEED_ON, T_FEED_OFF, M_FLOW_EXTRACT, M_FLOW_FEED, M_FLOW_GRID,
+ PERIOD, SENSOR_RESOLUTION) = range(10)
+
+
+def initial_state(params: Params) -> np.ndarray:
+    x = np.zeros(len(STATES), dtype=np.float64)
+    x[X_SINCE] = 1e300  # the first step scans
+    return x
+
+
+@njit(cache=True)
+def step(dt, x, p, T_top, T_upper):
+    """Scan when a period has passed; returns (m_flow_set, m_flow_grid_set)."""
+    if p[ACTIVE] < 0.5:
+        return 0.0, 0.0
+    x[X_SINCE] += dt
+    if x[X_SINCE] + 1e-9 >= p[PERIOD]:
+        x[X_SINCE] = 0.0
+        r = p[SENSOR_RESOLUTION]
+        T_top, T_upper = quantize(T_top, r), quantize(T_upper, r)
+        if T_top > p[T_EXTRACT_OFF]:
+            x[X_EXTRACT] = 0.0
+        elif T_top < p[T_EXTRACT_ON]:
+            x[X_EXTRACT] = 1.0
+        if T_upper < p[T_FEED_OFF] or x[X_EXTRACT] > 0.5:
+            x[X_FEED] = 0.0
+        elif T_upper > p[T_FEED_ON]:
+            x[X_FEED] = 1.0
+    if x[X_EXTRACT] > 0.5:
+        return p[M_FLOW_EXTRACT], p[M_FLOW_GRID]
+    if x[X_FEED] > 0.5:
+        return -p[M_FLOW_FEED], p[M_FLOW_GRID]
+    return 0.0, 0.0
+
+
+class Kind(ComponentKind):
+    """Storage temperatures in (signal links), the substation's house- and grid-side flows out."""
+
+    name = "substation_rules"
+    Params = Params
+    role = "controller"
+    INPUTS = ("T_top", "T_upper")
+    OUTPUTS = ("m_flow_set", "m_flow_grid_set")
+    LINKS = {"inputs": (REQUIRED, "measurements: T_top (extraction), T_upper (feed-in) = signal names"),
+             "outputs": (REQUIRED, "commands: m_flow_set, m_flow_grid_set = the substation's input signals")}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def emit(self, c, inst):
+        from . import check_keys, read, write
+
+        check_keys(c, inst, self.INPUTS, self.OUTPUTS)
+        for key in self.OUTPUTS:
+            if key not in inst.options["outputs"]:
+                c.problems.append(f"{inst.at('outputs')}.{key}: missing; link it to the substation's input, "
+                                  f"e.g. {key} = \"substation.{key}\"")
+        q = inst.params
+        if q.T_extract_on > q.T_extract_off:
+            c.problems.append(f"{inst.at('T_extract_on')} = {q.T_extract_on:g}: above T_extract_off = "
+                              f"{q.T_extract_off:g}; extraction must start below where it stops")
+        if q.T_feed_off > q.T_feed_on:
+            c.problems.append(f"{inst.at('T_feed_off')} = {q.T_feed_off:g}: above T_feed_on = "
+                              f"{q.T_feed_on:g}; feed-in must stop below where it starts")
+        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        outs = [c.var(v) for v in self.OUTPUTS]
+        c.emit("control", f"{', '.join(outs)} = {c.module(__name__)}.step(h, {x}, {p}, "
+                          f"{', '.join(read(c, inst, k) for k in self.INPUTS)})")
+        for key, v in zip(self.OUTPUTS, outs):
+            write(c, inst, key, v)
+        sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
+        c.emit("signals",
+               f"{sig('extracting', 'extraction command of the rules (0/1)')} = {x}[{X_EXTRACT}]",
+               f"{sig('feeding_in', 'feed-in command of the rules (0/1)')} = {x}[{X_FEED}]")
