@@ -58,9 +58,6 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     if serve:
         tcp = rt.add_modbus_tcp(host, district.modbus_port(name))
         rt.add_canopen(can or f"virtual:{district.name}-{name}")
-        units = ", ".join(f"{d.id}=unit {d.unit_id}/node {d.map.canopen.node_id}" for d in rt.devices.values())
-        print(f"{name}: modbus-tcp {host}:{tcp.port}; canopen {can or f'virtual:{district.name}-{name}'}; "
-              f"devices: {units}", flush=True)
     fed = engine.Federate(name, broker, district.step)
     pub_key, sub_key = engine.keys(district.name, name)
     pub = fed.publication(pub_key)
@@ -68,6 +65,10 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     fed.initialize()
     fed.start()
     rt.start()
+    if serve:
+        units = ", ".join(f"{d.id}=unit {d.unit_id}/node {d.map.canopen.node_id}" for d in rt.devices.values())
+        print(f"{name}: serving modbus-tcp {host}:{tcp.port}; canopen {can or f'virtual:{district.name}-{name}'}; "
+              f"devices: {units}", flush=True)
     steps = int(round(days * 86400.0 / district.step))
     per_step = int(round(district.step / tick))
     wall0 = time.monotonic()

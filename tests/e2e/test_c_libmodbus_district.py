@@ -1,0 +1,76 @@
+"""The C libmodbus controller runs house 1 of a running district (`twin district serve`, paced)
+while house 2 runs its built-in controllers; both houses and the grid are their own processes."""
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from gateway.federation.engine import free_port
+from profiles.recording import read_recording
+
+from .test_c_libmodbus import build_tools, controller_bin  # noqa: F401 (fixtures: build the example)
+
+SPEED = 240.0       # simulated seconds per wall second
+DAYS = 0.05         # 72 min: 18 s of wall time
+PERIOD_MS = 250     # the controller scans every 60 simulated seconds
+
+
+def test_c_controller_runs_one_house_of_a_district(tmp_path, controller_bin):  # noqa: F811
+    p1, p2 = free_port(), free_port()
+    district = tmp_path / "district.toml"
+    district.write_text(f"""
+[district]
+name = "cdistrict"
+step = 60.0
+[plant]
+node = "plant"
+[pipes.p1]
+from = "plant"
+to = "n1"
+[pipes.p2]
+from = "n1"
+to = "n2"
+[houses.house1]
+node = "n1"
+controller = "external"
+modbus_port = {p1}
+overrides = {{ "storage.T_init_top" = 62.0 }}   # below the controller's CHP threshold of 65 degC
+[houses.house2]
+node = "n2"
+modbus_port = {p2}
+""")
+    out = tmp_path / "run"
+    twin = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "district", "serve", str(district),
+                             "--days", str(DAYS), "--speed", str(SPEED), "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    log = out / "logs" / "house1.log"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (log.exists() and "serving modbus-tcp" in log.read_text()):
+        assert twin.poll() is None, twin.communicate()
+        time.sleep(0.1)
+    assert f"serving modbus-tcp 127.0.0.1:{p1}" in log.read_text()
+    scans = int(DAYS * 86400 / 60) - 12     # stop before the district does
+    ctl = subprocess.run([str(controller_bin), "-p", str(p1), "--period", str(PERIOD_MS), "--cycles", str(scans)],
+                         capture_output=True, text=True, timeout=120)
+    stdout, stderr = twin.communicate(timeout=120)
+    assert ctl.returncode == 0, ctl.stdout + ctl.stderr
+    assert twin.returncode == 0, stderr
+    assert f"house1: node n1, modbus-tcp 127.0.0.1:{p1}" in stdout and "controller external" in stdout
+    lines = ctl.stdout.splitlines()
+    assert len(lines) == scans and not any("link=down" in line for line in lines)
+    assert "chp=1" in lines[0]                              # 62 degC at the top: the CHP is asked to run
+
+    h1 = read_recording(out / "house1")
+    writes = [e for e in h1.events if e["kind"] == "write"]
+    assert {e["point"] for e in writes} >= {"run_request", "modulation_set", "demand_voltage", "charge_enable"}
+    assert all(e["accepted"] == "True" for e in writes)
+    on = h1.values[:, h1.names.index("chp.on")]
+    P_el = h1.values[:, h1.names.index("chp.P_el")]
+    assert (on == 1.0).sum() > len(on) // 2 and P_el.max() > 1800.0   # the CHP ran on the C controller's command
+
+    h2 = read_recording(out / "house2")                      # house 2 on its own rules, no client
+    assert not [e for e in h2.events if e["kind"] == "write"]
+    assert h2.values[:, h2.names.index("heat_pump.Q_flow")].max() > 1000.0
+    grid = read_recording(out / "grid")
+    assert len(grid.time) == int(DAYS * 86400 / 60) + 1 and np.all(np.isfinite(grid.values))
