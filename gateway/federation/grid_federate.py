@@ -10,6 +10,7 @@ import argparse
 import json
 import signal
 import sys
+import time
 from pathlib import Path
 
 from plant.grid.network import Draw, Grid
@@ -66,6 +67,7 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
         bar = tqdm(total=steps, unit="step", desc=f"district {district.name}", file=sys.stderr,
                    mininterval=1.0)
     draws: dict[str, Draw] = {}
+    loop = [time.time(), 0.0]  # wall clock of the exchange loop (benchmarks/district_scale.py)
     try:
         if rec:
             rec.signals(0.0, row(grid, draws))
@@ -82,13 +84,14 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
                 rec.flush()
             if bar:
                 bar.update(1)
+        loop[1] = time.time()
     finally:
         if bar:
             bar.close()
         fed.close()
     ledger = grid.ledger()
     if rec:
-        rec.close({"ledger": ledger, "t_end": grid.t})
+        rec.close({"ledger": ledger, "t_end": grid.t, "loop_wall": loop})
     return {"ledger": ledger, "t": grid.t}
 
 

@@ -72,6 +72,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     steps = int(round(days * 86400.0 / district.step))
     per_step = int(round(district.step / tick))
     wall0 = time.monotonic()
+    loop = [time.time(), 0.0]  # wall clock of the exchange loop (benchmarks/district_scale.py)
     try:
         rt.recorder and rt.recorder.signals(0.0, house.values())
         for k in range(steps):
@@ -93,6 +94,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
             fed.publish(pub, exchange(before, after, T_sup, T_ret))
             if rt.recorder:
                 rt.recorder.flush()  # a district killed mid-run leaves every house readable to here
+        loop[1] = time.time()
     finally:
         fed.close()
     report = rt.stop()
@@ -101,7 +103,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
         return {"ledger": ledger, "t": house.t}
     meta = json.loads((out / name / "meta.json").read_text())
     meta.update({"ledger": ledger, "district": str(district.path), "node": entry.node, "t_end": house.t,
-                 "final": dict(zip(house.catalogue.names, house.values().tolist()))})
+                 "final": dict(zip(house.catalogue.names, house.values().tolist())), "loop_wall": loop})
     (out / name / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
     return {"ledger": ledger, "t": house.t, "audit": report["audit"]}
 
