@@ -32,9 +32,22 @@ Additions to the original (documented choices)
   max(flow, 1e-5 m3/s) instead, which breaks the energy balance.
 * P_el: −P_idle when not firing (also during the run-on), 0 while firing (as upstream).
 
-Parameters: see ``Params``.  Data source: upstream DZinsmeister/CoSES_thermal_ProHMo,
-``HeatGenerator/LaboratoryModels/Data/WolfCGB14/``, copied to ``plant/data/boiler_wolf_cgb/``.
-Assumptions: gas on LHV basis (η up to 1.05); the 20/50 kW variants reuse the 14 kW tables.
+Data sets (link ``data``)
+------------------------
+* ``wolf_cgb14`` (default): the CGB-14 laboratory tables, upstream DZinsmeister/CoSES_thermal_ProHMo
+  ``HeatGenerator/LaboratoryModels/Data/WolfCGB14/``, copied to ``plant/data/boiler_wolf_cgb/``;
+  P_nom scales the normalised power (CGB-50: P_nom = 50000, no table of its own exists upstream).
+* ``wolf_cgb20``: the CGB-20's data-sheet curves (``plant/data/boiler_wolf_cgb20/Wolf_CBG_20.txt``:
+  Q_CB_max and eta_norm at return 30…70 °C, Q_CB_min at 30 and 60 °C).  The steady tables keep the
+  CGB-14's measured shape and are anchored on them: at every row of the CGB-14 grid (25…70 °C)
+      P(T, m) = Q_min(T) + (Q_max(T) − Q_min(T))·s(T, m),  s = the CGB-14's (P(m) − P(0.2))/(P(1) − P(0.2)),
+      η(T, m) = eta_norm(T)·Eff14(T, m)/Eff14(T, 1),       ΔT: the CGB-14's,
+  with Q_max, Q_min, eta_norm interpolated linearly in T and held beyond their ends; the power is
+  normalised by 20 kW (P_nom = 20000 reproduces the data sheet).  So at full modulation the model
+  gives Q_CB_max and eta_norm, at the minimum modulation (m_min = 0.2) Q_CB_min, at their points
+  (tests/validation/test_boiler_cgb20.py).  Start-up and run-on: the CGB-14's tables.
+
+Parameters: see ``Params``.  Assumptions: gas on LHV basis (η up to 1.05).
 """
 from __future__ import annotations
 
@@ -50,6 +63,8 @@ from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "boiler_wolf_cgb"
+DATA_CGB20 = DATA.parent / "boiler_wolf_cgb20"
+DATA_SETS = ("wolf_cgb14", "wolf_cgb20")
 
 
 @dataclass(frozen=True)
@@ -89,12 +104,34 @@ def initial_state(params: Params) -> np.ndarray:
 
 @functools.cache
 def tables(variant: str = "standard") -> tuple[np.ndarray, ...]:
-    """(tab_P, tab_dT, tab_eff, tab_start, tab_cool); variant 'standard' or 'paper' steady-state tables."""
+    """(tab_P, tab_dT, tab_eff, tab_start, tab_cool); variant 'standard' or 'paper' (the CGB-14's
+    steady-state tables) or 'wolf_cgb20' (the CGB-20 data sheet on the CGB-14's shape)."""
+    if variant == "wolf_cgb20":
+        return _cgb20(*tables("standard"))
     name = {"standard": "WolfCGB14_SteadyState.txt", "paper": "WolfCGB14_SteadyState_Paper.txt"}[variant]
     ss = read_tables(DATA / name)
     start = read_tables(DATA / "WolfCGB14_StartUp.txt")["StartUp"]
     cool = read_tables(DATA / "WolfCGB14_CoolDown.txt")["CoolDown"]
     return ss["PHeat"], ss["DeltaT"], ss["EffHeat"], start, cool
+
+
+CGB20_RATING = 20000.0  # W: the power the wolf_cgb20 table is normalised by
+
+
+def _cgb20(tab_P, tab_dT, tab_eff, start, cool):
+    """The CGB-20 steady tables on the CGB-14 grid (module docstring, "Data sets")."""
+    sheet = read_tables(DATA_CGB20 / "Wolf_CBG_20.txt")
+    T = tab_P[1:, 0]
+    q_max = np.interp(T, sheet["Q_CB_max"][:, 0], sheet["Q_CB_max"][:, 1])
+    q_min = np.interp(T, sheet["Q_CB_min"][:, 0], sheet["Q_CB_min"][:, 1])
+    eta = np.interp(T, sheet["eta_norm"][:, 0], sheet["eta_norm"][:, 1])
+    P14 = tab_P[1:, 1:]
+    shape = (P14 - P14[:, :1]) / (P14[:, -1:] - P14[:, :1])
+    P, E = tab_P.copy(), tab_eff.copy()
+    P[1:, 1:] = (q_min[:, None] + (q_max - q_min)[:, None] * shape) / CGB20_RATING
+    E14 = tab_eff[1:, 1:]
+    E[1:, 1:] = eta[:, None] * (E14 / E14[:, -1:]) / Params().eta_max
+    return P, tab_dT, E, start, cool
 
 
 @njit(cache=True)
@@ -174,6 +211,8 @@ class Kind(ComponentKind):
     name = "boiler"
     Params = Params
     role = "generator"
+    LINKS = {"data": ("wolf_cgb14", "steady-state data set: wolf_cgb14 (CGB-14 laboratory tables, scaled by "
+                                    "P_nom) or wolf_cgb20 (the CGB-20 data sheet, P_nom = 20000)")}
 
     def initial_state(self, inst):
         return initial_state(inst.params)
@@ -181,7 +220,11 @@ class Kind(ComponentKind):
     def emit_generator(self, c, inst, T_in, m_ext):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))
-        tabs = ", ".join(c.table(a) for a in tables())
+        data = inst.options.get("data", "wolf_cgb14")
+        if data not in DATA_SETS:
+            c.problems.append(f"{inst.at('data')} = {data!r}: unknown data set; allowed: {', '.join(DATA_SETS)}")
+            data = "wolf_cgb14"
+        tabs = ", ".join(c.table(a) for a in tables("standard" if data == "wolf_cgb14" else data))
         U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
         mod = c.module(__name__)
         c.emit("hydraulics", f"{m}, {T}, {Pel}, {Pf}, {Ph}, {mode} = {mod}.step(t, h, {x}, {p}, {tabs}, "
