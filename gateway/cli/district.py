@@ -8,8 +8,10 @@ EXAMPLES = """examples:
   twin district list
   twin district run coses --days 7 --out runs/d1                     # lock-step, as fast as it goes
   twin district serve coses --speed 60 --out runs/d2                 # paced; each house serves its devices
-  twin district run coses --days 1 --out runs/d3 --listen 0.0.0.0 --broker-port 23500 --only grid,house1,house2
-  twin district join coses --broker tcp://HOST_A:23500 --only house3,house4,house5 --days 1 --out runs/d3b
+  twin district run coses --days 1 --out runs/d3 --listen HOST_A --broker-port 23500 --interface HOST_A \
+      --only grid,house1,house2                                       # host A: broker, grid, two houses
+  twin district join coses --broker tcp://HOST_A:23500 --interface HOST_B --only house3,house4,house5 \
+      --days 1 --out runs/d3b                                         # host B: the other three
 """
 
 
@@ -27,6 +29,8 @@ def register(sub) -> None:
         a.add_argument("--days", type=float, default=7.0 if action == "run" else 1.0, help="simulated days")
         a.add_argument("--out", type=Path, default=Path("runs/district"), help="recordings: one folder per member")
         a.add_argument("--only", help="comma-separated members started on this host (grid, house names)")
+        a.add_argument("--interface", help="this host's address as the broker's host reaches it (when the "
+                       "district spans hosts; default loopback)")
         if action == "join":
             a.add_argument("--broker", required=True, help="tcp://HOST:PORT of the broker on the other host")
         else:
@@ -63,7 +67,7 @@ def run(args) -> int:
     summary = launch(district, args.out, args.days, serve=serve,
                      speed=getattr(args, "speed", 0.0), only=only, broker=getattr(args, "broker", None),
                      listen=getattr(args, "listen", "127.0.0.1"), broker_port=getattr(args, "broker_port", None),
-                     host=getattr(args, "host", "127.0.0.1"))
+                     host=getattr(args, "host", "127.0.0.1"), interface=args.interface)
     if "balance" in summary:
         b = summary["balance"]
         print(f"district {district.name}: {len(district.houses)} houses, {args.days:g} days -> {args.out}")

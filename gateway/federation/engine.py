@@ -49,12 +49,15 @@ class Broker:
 class Federate:
     """A value federate joined to the broker at `broker` (tcp://host:port)."""
 
-    def __init__(self, name: str, broker: str, period: float, offset: float = 0.0):
+    def __init__(self, name: str, broker: str, period: float, offset: float = 0.0, interface: str | None = None):
+        """`interface`: this host's address as the broker's host reaches it (the broker connects
+        back to each federate's core); None on the broker's own host (loopback)."""
         h = _h()
         info = h.helicsCreateFederateInfo()
         h.helicsFederateInfoSetCoreTypeFromString(info, "zmq")
         host_port = broker.removeprefix("tcp://")
-        h.helicsFederateInfoSetCoreInitString(info, f"--federates=1 --broker_address=tcp://{host_port}")
+        local = f" --local_interface=tcp://{interface}" if interface else ""
+        h.helicsFederateInfoSetCoreInitString(info, f"--federates=1 --broker_address=tcp://{host_port}{local}")
         h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_PERIOD, period)
         if offset:
             h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_OFFSET, offset)

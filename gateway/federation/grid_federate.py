@@ -41,7 +41,8 @@ def row(grid: Grid, draws: dict[str, Draw]) -> list[float]:
                    grid.E["to_houses"], grid.stored_energy()]
 
 
-def run(district, broker: str, out: Path | None, days: float, progress: bool = True) -> dict:
+def run(district, broker: str, out: Path | None, days: float, progress: bool = True,
+        interface: str | None = None) -> dict:
     from profiles.recording import Recorder
 
     grid = Grid(district.grid)
@@ -49,7 +50,7 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
     if out:
         rec = Recorder(out / "grid", columns(grid), {"district": str(district.path), "step": district.step,
                                                       "start": district.start}, interval=district.step)
-    fed = engine.Federate("grid", broker, district.step, offset=engine.OFFSET)
+    fed = engine.Federate("grid", broker, district.step, offset=engine.OFFSET, interface=interface)
     subs, pubs = {}, {}
     for h in grid.houses:
         pub_key, sub_key = engine.keys(district.name, h)
@@ -104,9 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path)
     p.add_argument("--days", type=float, default=7.0)
     p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-    result = run(load_district(a.district), a.broker, a.out, a.days, not a.no_progress)
+    result = run(load_district(a.district), a.broker, a.out, a.days, not a.no_progress, a.interface)
     print(json.dumps({"grid": result["ledger"]}), flush=True)
     return 0
 

@@ -50,7 +50,7 @@ def build(district, entry, out: Path | None, serve: bool, tick: float):
 
 
 def run(district, name: str, broker: str, out: Path | None, days: float, serve: bool = False,
-        speed: float = 0.0, host: str = "127.0.0.1", can: str | None = None) -> dict:
+        speed: float = 0.0, host: str = "127.0.0.1", can: str | None = None, interface: str | None = None) -> dict:
     entry = district.house(name)
     tick = 1.0 if serve else district.step
     rt = build(district, entry, out, serve, tick)
@@ -58,7 +58,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     if serve:
         tcp = rt.add_modbus_tcp(host, district.modbus_port(name))
         rt.add_canopen(can or f"virtual:{district.name}-{name}")
-    fed = engine.Federate(name, broker, district.step)
+    fed = engine.Federate(name, broker, district.step, interface=interface)
     pub_key, sub_key = engine.keys(district.name, name)
     pub = fed.publication(pub_key)
     sub = fed.subscription(sub_key)
@@ -120,9 +120,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--serve", action="store_true")
     p.add_argument("--speed", type=float, default=0.0)
     p.add_argument("--host", default="127.0.0.1")
+    p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # finally-blocks close the recording
-    run(load_district(a.district), a.house, a.broker, a.out, a.days, a.serve, a.speed, a.host)
+    run(load_district(a.district), a.house, a.broker, a.out, a.days, a.serve, a.speed, a.host,
+        interface=a.interface)
     return 0
 
 

@@ -34,13 +34,14 @@ def members(district) -> list[str]:
 
 
 def command(district, member: str, broker: str, out: Path, days: float, serve: bool, speed: float,
-            host: str) -> list[str]:
+            host: str, interface: str | None = None) -> list[str]:
     py = [sys.executable, "-m"]
+    local = ["--interface", interface] if interface else []
     if member == "grid":
         return py + ["gateway.federation.grid_federate", "--district", str(district.path), "--broker", broker,
-                     "--out", str(out), "--days", str(days)]
+                     "--out", str(out), "--days", str(days)] + local
     cmd = py + ["gateway.federation.house_federate", "--district", str(district.path), "--house", member,
-                "--broker", broker, "--out", str(out), "--days", str(days), "--host", host]
+                "--broker", broker, "--out", str(out), "--days", str(days), "--host", host] + local
     if serve:
         cmd += ["--serve", "--speed", str(speed)]
     return cmd
@@ -62,7 +63,8 @@ def last_time(out: Path, member: str) -> float | None:
 
 def launch(district, out: Path, days: float, *, serve: bool = False, speed: float = 0.0,
            only: list[str] | None = None, broker: str | None = None, listen: str = "127.0.0.1",
-           broker_port: int | None = None, host: str = "127.0.0.1", echo=print) -> dict:
+           broker_port: int | None = None, host: str = "127.0.0.1", interface: str | None = None,
+           echo=print) -> dict:
     """Run the district (or this host's share of it) to the end; returns the district summary."""
     out.mkdir(parents=True, exist_ok=True)
     names = members(district)
@@ -82,7 +84,7 @@ def launch(district, out: Path, days: float, *, serve: bool = False, speed: floa
     try:
         for m in mine:
             err = None if m == "grid" else open(logs / f"{m}.log", "w")
-            procs[m] = subprocess.Popen(command(district, m, broker, out, days, serve, speed, host), env=env,
+            procs[m] = subprocess.Popen(command(district, m, broker, out, days, serve, speed, host, interface), env=env,
                                         stdout=subprocess.PIPE if m == "grid" else err,
                                         stderr=None if m == "grid" else subprocess.STDOUT, text=True)
         failed = _watch(procs, out)
