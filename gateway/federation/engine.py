@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import socket
 
+from plant.errors import TwinError
+
 OFFSET = 1e-3  # s: the grid's grants trail the houses' by this much
 
 
@@ -20,6 +22,10 @@ def _h():
     import helics
 
     return helics
+
+
+class Stopped(TwinError):
+    """The engine stopped this federate: the district was aborted (a member died) or its broker went away."""
 
 
 class Broker:
@@ -38,6 +44,10 @@ class Broker:
 
     def connected(self) -> bool:
         return bool(_h().helicsBrokerIsConnected(self._b))
+
+    def abort(self, message: str) -> None:
+        """Stop every federate through the engine: their pending time requests raise Stopped."""
+        _h().helicsBrokerGlobalError(self._b, 1, message.encode())  # helics 3.6.1's binding wants bytes here
 
     def close(self, wait_ms: int = 2000) -> None:
         h = _h()
@@ -80,20 +90,29 @@ class Federate:
     def start(self) -> None:
         _h().helicsFederateEnterExecutingMode(self._f)
 
+    def _call(self, fn, *args):
+        """An engine call during the run; the engine's refusal after an abort becomes Stopped."""
+        h = _h()
+        try:
+            return fn(*args)
+        except h.HelicsException as exc:
+            raise Stopped(f"stopped by the engine: {exc}") from None
+
     def request(self, t: float) -> float:
-        return _h().helicsFederateRequestTime(self._f, t)
+        return self._call(_h().helicsFederateRequestTime, self._f, t)
 
-    @staticmethod
-    def publish(pub, values) -> None:
-        _h().helicsPublicationPublishVector(pub, [float(v) for v in values])
+    def publish(self, pub, values) -> None:
+        self._call(_h().helicsPublicationPublishVector, pub, [float(v) for v in values])
 
-    @staticmethod
-    def read(sub) -> list[float]:
-        return list(_h().helicsInputGetVector(sub))
+    def read(self, sub) -> list[float]:
+        return list(self._call(_h().helicsInputGetVector, sub))
 
     def close(self) -> None:
         h = _h()
-        h.helicsFederateDisconnect(self._f)
+        try:
+            h.helicsFederateDisconnect(self._f)
+        except h.HelicsException:
+            pass  # after an abort the federate is already out of the co-simulation
         h.helicsFederateFree(self._f)
 
 

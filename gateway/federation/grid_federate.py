@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from plant.errors import TwinError
 from plant.grid.network import Draw, Grid
 
 from . import engine
@@ -69,6 +70,7 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
                    mininterval=1.0)
     draws: dict[str, Draw] = {}
     loop = [time.time(), 0.0]  # wall clock of the exchange loop (benchmarks/district_scale.py)
+    stopped = None
     try:
         if rec:
             rec.signals(0.0, row(grid, draws))
@@ -86,13 +88,17 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
             if bar:
                 bar.update(1)
         loop[1] = time.time()
+    except engine.Stopped as exc:
+        stopped = exc
     finally:
         if bar:
             bar.close()
         fed.close()
     ledger = grid.ledger()
     if rec:
-        rec.close({"ledger": ledger, "t_end": grid.t, "loop_wall": loop})
+        rec.close({"ledger": ledger, "t_end": grid.t, "loop_wall": loop, "stopped": str(stopped) if stopped else None})
+    if stopped:
+        raise stopped
     return {"ledger": ledger, "t": grid.t}
 
 
@@ -108,7 +114,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
-    result = run(load_district(a.district), a.broker, a.out, a.days, not a.no_progress, a.interface)
+    try:
+        result = run(load_district(a.district), a.broker, a.out, a.days, not a.no_progress, a.interface)
+    except TwinError as exc:
+        print(f"grid: {exc}", file=sys.stderr, flush=True)
+        return 3
     print(json.dumps({"grid": result["ledger"]}), flush=True)
     return 0
 

@@ -20,6 +20,7 @@ import sys
 import time
 from pathlib import Path
 
+from plant.errors import TwinError
 from plant.water import CP
 
 from . import engine
@@ -73,6 +74,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     per_step = int(round(district.step / tick))
     wall0 = time.monotonic()
     loop = [time.time(), 0.0]  # wall clock of the exchange loop (benchmarks/district_scale.py)
+    stopped = None
     try:
         rt.recorder and rt.recorder.signals(0.0, house.values())
         for k in range(steps):
@@ -95,16 +97,20 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
             if rt.recorder:
                 rt.recorder.flush()  # a district killed mid-run leaves every house readable to here
         loop[1] = time.time()
+    except engine.Stopped as exc:
+        stopped = exc
     finally:
         fed.close()
     report = rt.stop()
     ledger = house.ledger()
-    if rt.recorder is None:
-        return {"ledger": ledger, "t": house.t}
-    meta = json.loads((out / name / "meta.json").read_text())
-    meta.update({"ledger": ledger, "district": str(district.path), "node": entry.node, "t_end": house.t,
-                 "final": dict(zip(house.catalogue.names, house.values().tolist())), "loop_wall": loop})
-    (out / name / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
+    if rt.recorder is not None:
+        meta = json.loads((out / name / "meta.json").read_text())
+        meta.update({"ledger": ledger, "district": str(district.path), "node": entry.node, "t_end": house.t,
+                     "final": dict(zip(house.catalogue.names, house.values().tolist())), "loop_wall": loop,
+                     "stopped": str(stopped) if stopped else None})
+        (out / name / "meta.json").write_text(json.dumps(meta, indent=2, default=str))
+    if stopped:
+        raise stopped
     return {"ledger": ledger, "t": house.t, "audit": report["audit"]}
 
 
@@ -123,8 +129,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # finally-blocks close the recording
-    run(load_district(a.district), a.house, a.broker, a.out, a.days, a.serve, a.speed, a.host,
-        interface=a.interface)
+    try:
+        run(load_district(a.district), a.house, a.broker, a.out, a.days, a.serve, a.speed, a.host,
+            interface=a.interface)
+    except TwinError as exc:
+        print(f"{a.house}: {exc}", file=sys.stderr, flush=True)
+        return 3
     return 0
 
 

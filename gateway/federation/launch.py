@@ -4,8 +4,10 @@ The launcher holds no simulation state and passes no values: time and values go 
 broker only (docs/district.md). It starts the broker (unless joining one elsewhere), starts the
 federates of this host as child processes (`only`: a subset, the others join from another host
 with `twin district join`), and watches them. A child that dies is reported by name with the
-last time its recording reached; the others are stopped (SIGTERM, then SIGKILL) and their
-recordings, flushed every exchange step, stay readable up to their last step. At the end it
+last time its recording reached; the others are stopped through the engine (the broker's global
+error makes their time requests fail, so they close their recordings and leave), and SIGTERM,
+then SIGKILL, only for what is still running after that. Recordings are flushed every exchange
+step and stay readable up to their last step. At the end it
 writes `district.json`: each house's and the grid's ledger and the district's energy balance.
 """
 from __future__ import annotations
@@ -81,24 +83,26 @@ def launch(district, out: Path, days: float, *, serve: bool = False, speed: floa
     logs = out / "logs"
     logs.mkdir(exist_ok=True)
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    failed = None
     try:
         for m in mine:
             err = None if m == "grid" else open(logs / f"{m}.log", "w")
-            procs[m] = subprocess.Popen(command(district, m, broker, out, days, serve, speed, host, interface), env=env,
-                                        stdout=subprocess.PIPE if m == "grid" else err,
+            procs[m] = subprocess.Popen(command(district, m, broker, out, days, serve, speed, host, interface),
+                                        env=env, stdout=subprocess.PIPE if m == "grid" else err,
                                         stderr=None if m == "grid" else subprocess.STDOUT, text=True)
         failed = _watch(procs, out)
     finally:
+        if failed and own is not None:  # the others leave through the engine, closing their recordings
+            own.abort(f"{failed[0]} stopped")
+            _wait(procs, STOP_GRACE)
         for p in procs.values():
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)
-        deadline = time.monotonic() + STOP_GRACE
-        for p in procs.values():
-            try:
-                p.wait(timeout=max(0.1, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()
+        if not _wait(procs, STOP_GRACE):
+            for p in procs.values():
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
         if own is not None:
             own.close(wait_ms=500)
     if failed:
@@ -111,6 +115,16 @@ def launch(district, out: Path, days: float, *, serve: bool = False, speed: floa
                              f"the other federates were stopped; recordings in {out} are readable up to "
                              f"their last step" + (f"\n--- {log} (end) ---\n{tail}" if tail else ""))
     return summarize(district, out) if only is None else {"members": mine}
+
+
+def _wait(procs: dict[str, subprocess.Popen], seconds: float) -> bool:
+    """Wait up to `seconds` for every child to exit; True when all have."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if all(p.poll() is not None for p in procs.values()):
+            return True
+        time.sleep(0.05)
+    return all(p.poll() is not None for p in procs.values())
 
 
 def _watch(procs: dict[str, subprocess.Popen], out: Path):

@@ -124,11 +124,16 @@ def test_a_killed_house_is_named_the_others_stop_and_every_recording_reads(tmp_p
         time.sleep(0.2)
     assert victim, "house2 never started"
     os.kill(victim, signal.SIGKILL)
+    t_kill = time.monotonic()
     stdout, stderr = p.communicate(timeout=60)
+    assert time.monotonic() - t_kill < 4.0                     # no SIGKILL grace period needed
     assert p.returncode == 2
     assert "house2 stopped (killed by signal 9) at t = " in stderr, stderr
     assert "the other federates were stopped" in stderr
     assert not _pids(f"federate.*{out}")                      # nobody left behind
+    for member in ("house1", "grid"):                           # they left through the engine
+        meta = json.loads((out / member / "meta.json").read_text())
+        assert "stopped by the engine" in meta["stopped"] and "house2 stopped" in meta["stopped"], meta["stopped"]
     for member in ("house1", "house2", "grid"):
         rec = read_recording(out / member)
         assert len(rec.time) > 50 and np.all(np.diff(rec.time) > 0) and rec.dropped_rows == 0
