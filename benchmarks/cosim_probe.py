@@ -25,7 +25,6 @@ import asyncio
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -133,18 +132,9 @@ def role_helics_grid(broker_address: str, n: int, own_broker_port: int | None = 
 # ---------------------------------------------------------------- orchestration (the parent)
 
 def _free_port() -> int:
-    # HELICS' zmq broker also binds port + 1; ask for a pair that is free now.
-    for _ in range(50):
-        with socket.socket() as s:
-            s.bind((HOST, 0))
-            port = s.getsockname()[1]
-        try:
-            with socket.socket() as s:
-                s.bind((HOST, port + 1))
-            return port
-        except OSError:
-            continue
-    raise RuntimeError("no free pair of loopback ports")
+    from gateway.federation.engine import free_port  # the adapter's: zmq binds port and port + 1
+
+    return free_port(HOST)
 
 
 def _py() -> list[str]:
