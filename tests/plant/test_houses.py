@@ -38,7 +38,8 @@ def _check(name, u, on_ok, off_ok):
 
 
 def test_heat_pump_rules_switch_at_their_thresholds():
-    house = load_house("house2", start="2021-01-22")  # two days in which every actuator cycles
+    house = load_house("house2", start="2021-03-25")  # two days in which every actuator cycles (with the
+    # TABULA-class building the January storage stays above the valve's 55 degC all day)
     names = house.catalogue.names
     _, rows = house.run(2 * 86400, dt=5.0, out_interval=5.0)  # 5 s: the longest internal step
     col = lambda n: rows[:, names.index(n)]  # noqa: E731
