@@ -52,7 +52,7 @@ def child_standalone(district: str, name: str, steps: int) -> None:
     from plant.grid.district import load_district
 
     d = load_district(district)
-    rt = build(d, d.house(name), None, serve=False, tick=d.step)
+    rt = build(d, d.house(name), None, tick=d.step)
     house = rt.house
     print("ready", flush=True)
     sys.stdin.readline()

@@ -16,6 +16,9 @@ import socket
 from plant.errors import TwinError
 
 OFFSET = 1e-3  # s: the grid's grants trail the houses' by this much
+# Fifty house processes starting on two cores keep a core from answering for tens of seconds:
+# HELICS' defaults (30 s to connect, a peer silent for two 5 s ticks is lost) are too tight there.
+TIMEOUTS = "--timeout=120s --tick=20s"
 
 
 def _h():
@@ -35,7 +38,7 @@ class Broker:
         h = _h()
         self.host, self.port = host, port or free_port(host)
         self._b = h.helicsCreateBroker("zmq", name, f"--federates={federates} --local_interface=tcp://{host} "
-                                                    f"--port={self.port}")
+                                                    f"--port={self.port} {TIMEOUTS}")
 
     @property
     def address(self) -> str:
@@ -67,7 +70,7 @@ class Federate:
         h.helicsFederateInfoSetCoreTypeFromString(info, "zmq")
         host_port = broker.removeprefix("tcp://")
         local = f" --local_interface=tcp://{interface}" if interface else ""
-        h.helicsFederateInfoSetCoreInitString(info, f"--federates=1 --broker_address=tcp://{host_port}{local}")
+        h.helicsFederateInfoSetCoreInitString(info, f"--federates=1 --broker_address=tcp://{host_port}{local} {TIMEOUTS}")
         h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_PERIOD, period)
         if offset:
             h.helicsFederateInfoSetTimeProperty(info, h.HELICS_PROPERTY_TIME_OFFSET, offset)

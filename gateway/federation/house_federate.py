@@ -34,7 +34,7 @@ def exchange(before: list[float], after: list[float], T_sup: float, T_ret: float
     return [M_e, M_e * CP * T_sup - Q_e, M_f, M_f * CP * T_ret + Q_f]
 
 
-def build(district, entry, out: Path | None, serve: bool, tick: float):
+def build(district, entry, out: Path | None, tick: float):
     """The house's Runtime: plant with the district's overrides, devices, recording, transports."""
     from gateway.clock import LockStepClock
     from gateway.runtime import Runtime
@@ -45,7 +45,7 @@ def build(district, entry, out: Path | None, serve: bool, tick: float):
                        overrides=entry.house_overrides())
     for name in ("substation.T_grid_sup", "substation.T_grid_ret"):
         house.set(name, house.get(name))  # from now on the grid's values, not the parameters
-    rt = Runtime(house, clock=LockStepClock(tick if serve else district.step),
+    rt = Runtime(house, clock=LockStepClock(tick),
                  record=out / entry.name if out else None, record_interval=district.step)
     return rt
 
@@ -54,7 +54,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
         speed: float = 0.0, host: str = "127.0.0.1", can: str | None = None, interface: str | None = None) -> dict:
     entry = district.house(name)
     tick = 1.0 if serve else district.step
-    rt = build(district, entry, out, serve, tick)
+    rt = build(district, entry, out, tick)
     house = rt.house
     if serve:
         tcp = rt.add_modbus_tcp(host, district.modbus_port(name))

@@ -71,7 +71,7 @@ def test_coupled_through_the_engine_equals_the_same_coupling_in_one_process(tmp_
                                     '"substation_control.T_extract_on" = 69.5, "substation_control.T_extract_off" = 72.0 }'))
     launch(d, tmp_path / "run", DAYS, echo=lambda *_: None)
     entry = d.house("house1")
-    rt = build(d, entry, None, serve=False, tick=d.step)
+    rt = build(d, entry, None, tick=d.step)
     house, grid = rt.house, Grid(d.grid)
     for _ in range(int(DAYS * 86400 / d.step)):
         T_sup, T_ret = grid.temperatures("house1")
