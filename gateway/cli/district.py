@@ -63,7 +63,7 @@ def run(args) -> int:
         for h in district.houses:
             if only is None or h.name in only:
                 print(f"{h.name}: node {h.node}, modbus-tcp {args.host}:{district.modbus_port(h.name)}, "
-                      f"canopen virtual:{district.name}-{h.name}, controller {h.controller}", flush=True)
+                      f"canopen {district.can_bus(h.name)}, controller {h.controller}", flush=True)
     summary = launch(district, args.out, args.days, serve=serve,
                      speed=getattr(args, "speed", 0.0), only=only, broker=getattr(args, "broker", None),
                      listen=getattr(args, "listen", "127.0.0.1"), broker_port=getattr(args, "broker_port", None),

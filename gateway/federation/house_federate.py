@@ -51,14 +51,14 @@ def build(district, entry, out: Path | None, tick: float):
 
 
 def run(district, name: str, broker: str, out: Path | None, days: float, serve: bool = False,
-        speed: float = 0.0, host: str = "127.0.0.1", can: str | None = None, interface: str | None = None) -> dict:
+        speed: float = 0.0, host: str = "127.0.0.1", interface: str | None = None) -> dict:
     entry = district.house(name)
     tick = 1.0 if serve else district.step
     rt = build(district, entry, out, tick)
     house = rt.house
     if serve:
         tcp = rt.add_modbus_tcp(host, district.modbus_port(name))
-        rt.add_canopen(can or f"virtual:{district.name}-{name}")
+        rt.add_canopen(district.can_bus(name))
     fed = engine.Federate(name, broker, district.step, interface=interface)
     pub_key, sub_key = engine.keys(district.name, name)
     pub = fed.publication(pub_key)
@@ -68,7 +68,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     rt.start()
     if serve:
         units = ", ".join(f"{d.id}=unit {d.unit_id}/node {d.map.canopen.node_id}" for d in rt.devices.values())
-        print(f"{name}: serving modbus-tcp {host}:{tcp.port}; canopen {can or f'virtual:{district.name}-{name}'}; "
+        print(f"{name}: serving modbus-tcp {host}:{tcp.port}; canopen {district.can_bus(name)}; "
               f"devices: {units}", flush=True)
     steps = int(round(days * 86400.0 / district.step))
     per_step = int(round(district.step / tick))

@@ -31,6 +31,8 @@
     controller = "built-in"      # or "external": a real controller attached to its devices
     overrides = { "storage.UA_loss" = 5.0 }
     modbus_port = 5031           # optional: fixed port for twin district serve
+    can = "socketcand:127.0.0.1:29536:can0"   # optional: its CANopen nodes' bus (default: the
+                                 # house process's own virtual bus, which no other process sees)
 
 Every problem is listed at once with file:line, key, value and the fix (ConfigError).
 """
@@ -51,7 +53,7 @@ KEYS = {
     "plant": {"node", "T_supply", "T_return"},
     "grid": {"node_volume", "T_init_supply", "T_init_return"},
     "pipe": {"from", "to", "length", "diameter", "U", "roughness"},
-    "house": {"file", "node", "substation", "controller", "overrides", "modbus_port"},
+    "house": {"file", "node", "substation", "controller", "overrides", "modbus_port", "can"},
 }
 SUBSTATION = ("rules", "off")
 CONTROLLER = ("built-in", "external")
@@ -66,6 +68,7 @@ class HouseEntry:
     controller: str = "built-in"
     overrides: dict = field(default_factory=dict)
     modbus_port: int = 0
+    can: str = ""
 
     def house_overrides(self) -> dict:
         """The overrides the house is loaded with: the file's, plus the substation controller."""
@@ -88,6 +91,10 @@ class District:
             if h.name == name:
                 return h
         raise ConfigError(f"{self.path}: no house {name!r}; houses: {', '.join(h.name for h in self.houses)}")
+
+    def can_bus(self, name: str) -> str:
+        """The house's CANopen bus: its own, or a virtual bus inside its process."""
+        return self.house(name).can or f"virtual:{self.name}-{name}"
 
     def modbus_port(self, name: str) -> int:
         for k, h in enumerate(self.houses, 1):
@@ -219,7 +226,12 @@ def load_district(name_or_path: str | Path) -> District:
             problems.append(f"{where(sec, 'overrides')}: [{sec}] overrides must be a table of \"instance.key\" = value")
             ov = {}
         port = int(number(sec, h, "modbus_port", 0, 0, 65535))
-        houses.append(HouseEntry(name, fp, str(node), sub, ctl, dict(ov), port))
+        bus = h.get("can", "")
+        if not isinstance(bus, str):
+            problems.append(f"{where(sec, 'can')}: [{sec}] can = {bus!r}: a bus spec such as "
+                            f"\"socketcand:127.0.0.1:29536:can0\" or \"socketcan:can0\"")
+            bus = ""
+        houses.append(HouseEntry(name, fp, str(node), sub, ctl, dict(ov), port, bus))
     if not houses:
         problems.append(f"{path}: no [houses.<name>] table; a district needs at least one house")
     if problems:
