@@ -194,6 +194,24 @@ class Context:
             return 0
         return n - 1 - min(int(h / H * n), n - 1)
 
+    def port_layers(self, inst: Instance, key: str, storage: str) -> tuple[int, int]:
+        """(upper, lower) layers of a port that is a height (the same layer twice) or a three-way
+        valve's { upper = ..., lower = ... } (the lab's SwitchPort, reference §8.4); each side's
+        problems name `key.upper` / `key.lower` at the key's line."""
+        v = inst.options[key]
+        if not isinstance(v, dict):
+            layer = self.port_layer(inst, key, storage)
+            return layer, layer
+        if set(v) != {"upper", "lower"}:
+            self.problems.append(f"{inst.at(key)} = {v!r}: a three-way valve needs {{ upper = ..., lower = ... }}")
+            return 0, 0
+        layers = []
+        for side in ("upper", "lower"):
+            inst.options[f"{key}.{side}"] = v[side]
+            inst.lines.setdefault(f"{key}.{side}", inst.lines.get(key))
+            layers.append(self.port_layer(inst, f"{key}.{side}", storage))
+        return layers[0], layers[1]
+
     # --- assembly ------------------------------------------------------------------------
     def catalogue(self) -> SignalCatalogue:
         """Inputs first, then every instance's signals in declaration order."""

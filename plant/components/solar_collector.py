@@ -1,5 +1,6 @@
 """Solar thermal collector with its solar pump and hysteresis control, delivering through a coil
-in a storage (the lab's solar circuit, reference §12.1).
+in a storage, or through a three-way valve to one of two coils (the lab's solar circuit,
+reference §12.1, §12.4).
 
 Physics in words
 ----------------
@@ -25,6 +26,15 @@ enthalpy difference goes into the node at the step's end, so the ledger closes t
 Ledger: the irradiance on the aperture is `fuel`, the absorbed heat `heat` (optical losses are
 the difference), thermal losses `loss`; the node's heat C x T_collector is stored energy.
 
+Two coils (house 3, §12.4): with `top = { upper = ..., lower = ... }` and `bottom = { upper = ...,
+lower = ... }` the collector's flow goes through a three-way valve (the lab's SwitchPort, §8.4)
+either all through the upper coil (conductance UA_upper) or all through the lower one (UA); the
+input `<name>.upper` (0/1) sets it. The house's rules write it (plant/controllers/
+heat_pump_rules.py, solar_upper: upper when T_collector - T_BT9 > 3 K, lower below 2 K); driven
+from outside, it is the controller's (the SiL's ST_A_V3_TL). The idle coil carries no flow and
+exchanges nothing; the collector return is the outlet of the coil in use, so the ledger closes
+as with one coil. Signals Q_flow_upper and E_heat_upper give the upper coil's share.
+
 Control (the lab's solar pump, §12.1): the pump switches on when T_collector - T_storage >
 dT_on and off when it falls below dT_off (held in between), T_storage being a storage sensor
 named by the link `sensor`; it stays off while that sensor is above T_storage_max. Flow when
@@ -49,7 +59,8 @@ Parameters (SI)
 | dT_flow_min, dT_flow_max | K | flow modulation on T_sup - T_ret (3 K, 7 K) |
 | modulating | - | flow modulation on (the original) or full flow whenever on |
 | T_storage_max | degC | pump blocked above this storage temperature (no such limit upstream: 95 degC keeps the water below boiling) |
-| UA | W/K | coil conductance (house 1: 1.8 m2 x 675 W/(m2 K) = 1215 W/K) |
+| UA | W/K | coil conductance, the lower coil's with two (house 1: 1.8 m2 x 675 W/(m2 K) = 1215 W/K) |
+| UA_upper | W/K | the upper coil's conductance with two coils (house 3: 1.9 m2 x 675 = 1282.5 W/K); 0 with one |
 | T_init | degC | initial collector temperature |
 
 Assumptions: no stagnation or boiling model (the node's temperature follows the curve however
@@ -58,9 +69,11 @@ high); no pipe losses or delay between collector and storage; the coil fluid hol
 is the flat-plate one with its published coefficients (GreenCity's own model is not available,
 reference §0.4).
 
-Data source: reference §12.1 (upstream DZinsmeister/CoSES_thermal_ProHMo, Houses/SF1.mo).
-Validated by tests/plant/test_solar.py (steady-state efficiency curve, daily energy balance,
-pump hysteresis, a June week of house 1 with its collector).
+Data source: reference §12.1, §12.4 (upstream DZinsmeister/CoSES_thermal_ProHMo, Houses/SF1.mo,
+SF3.mo). Validated by tests/plant/test_solar.py (steady-state efficiency curve, daily energy
+balance, pump hysteresis, a June week of house 1 with its collector) and
+tests/plant/test_solar_valve.py (house 3's valve thresholds, heat into the upper coil's layers,
+ledger closure, bad coil heights).
 """
 from __future__ import annotations
 
@@ -97,11 +110,12 @@ class Params:
     T_storage_max: float = param(95.0, "degC", "pump blocked above this storage temperature", 20.0, 100.0)
     UA: float = param(1215.0, "W/K", "conductance of the coil in the storage", 0.0, 1e6)
     T_init: float = param(20.0, "degC", "initial collector temperature", -30.0, 100.0)
+    UA_upper: float = param(0.0, "W/K", "conductance of the upper coil behind the solar valve (0: one coil)", 0.0, 1e6)
 
 
 (AREA, ETA0, A1, A2, C_EFF, B0, TILT, AZIMUTH, LATITUDE, LONGITUDE, ALBEDO, M_FLOW_MAX, DT_ON, DT_OFF,
- DT_FLOW_MIN, DT_FLOW_MAX, MODULATING, T_STORAGE_MAX, UA, T_INIT) = range(20)
-N_PARAMS = 20
+ DT_FLOW_MIN, DT_FLOW_MAX, MODULATING, T_STORAGE_MAX, UA, T_INIT, UA_UPPER) = range(21)
+N_PARAMS = 21
 
 STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
 X_T, X_TRET, X_TSUP, X_EHEAT, X_ESOLAR = range(5)
@@ -195,8 +209,9 @@ class Kind(ComponentKind):
     role = "connection"
     REFS = {"storage": "storage"}
     LINKS = {"storage": (REQUIRED, "the storage the solar coil is in"),
-             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom]"),
-             "bottom": (REQUIRED, "height of the coil outlet [m]"),
+             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom], or { upper = ..., "
+                               "lower = ... } for two coils behind the solar valve"),
+             "bottom": (REQUIRED, "height of the coil outlet [m], or { upper = ..., lower = ... }"),
              "sensor": (REQUIRED, "the storage temperature the pump control compares with "
                                   "(a signal, e.g. \"dhw_storage.T_sensor_5\")")}
 
@@ -209,9 +224,10 @@ class Kind(ComponentKind):
     def emit(self, c, inst):
         o = inst.options
         st = o["storage"]
-        top, bottom = c.port_layer(inst, "top", st), c.port_layer(inst, "bottom", st)
-        if isinstance(o["top"], (int, float)) and isinstance(o["bottom"], (int, float)) and o["top"] < o["bottom"]:
-            c.problems.append(f"{inst.at('top')} = {o['top']}: must be above bottom = {o['bottom']}")
+        valve = isinstance(o["top"], dict) or isinstance(o["bottom"], dict)
+        top_up, top = c.port_layers(inst, "top", st)
+        bottom_up, bottom = c.port_layers(inst, "bottom", st)
+        self._check_coils(c, inst, valve)
         if not isinstance(o["sensor"], str):
             c.problems.append(f"{inst.at('sensor')} = {o['sensor']!r}: must name a signal, e.g. "
                               f"\"{st}.T_sensor_5\"")
@@ -221,6 +237,7 @@ class Kind(ComponentKind):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
         k = c.storage_ports(st).add_coil(inst, top, bottom)
+        k_up = c.storage_ports(st).add_coil(inst, top_up, bottom_up) if valve else None
         T_st = c.s(o["sensor"]) if isinstance(o["sensor"], str) else "0.0"
         on = c.signal(inst, "on", "1", "input", "solar pump command (0/1); the built-in hysteresis "
                                                 "writes it unless driven from outside")
@@ -238,13 +255,29 @@ class Kind(ComponentKind):
                f"{p}[{LONGITUDE}], {p}[{TILT}], {p}[{AZIMUTH}], {p}[{ALBEDO}])",
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
                f"{m} = min(max({m_set}, 0.0), {p}[{M_FLOW_MAX}]) if {on} > 0.5 else 0.0",
-               f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})",
-               f"{st}_coil_m[{k}] = {m}",
-               f"{st}_coil_Tin[{k}] = {T_sup}",
-               f"{st}_coil_UA[{k}] = {p}[{UA}]")
+               f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})")
         Q, T_ret = c.var("Q_solar"), c.var("T_ret")
+        if valve:
+            up = c.signal(inst, "upper", "1", "input", "solar three-way valve: 1 = upper coil, 0 = lower coil "
+                                                         "(the rules write it unless driven from outside)")
+            side = c.var("upper")
+            c.emit("hydraulics",
+                   f"{side} = {up} > 0.5",
+                   f"{st}_coil_m[{k}] = 0.0 if {side} else {m}",
+                   f"{st}_coil_m[{k_up}] = {m} if {side} else 0.0",
+                   f"{st}_coil_Tin[{k}] = {T_sup}",
+                   f"{st}_coil_Tin[{k_up}] = {T_sup}",
+                   f"{st}_coil_UA[{k}] = {p}[{UA}]",
+                   f"{st}_coil_UA[{k_up}] = {p}[{UA_UPPER}]")
+            coil_out = f"({st}_coil_Tout[{k_up}] if {side} else {st}_coil_Tout[{k}])"
+        else:
+            c.emit("hydraulics",
+                   f"{st}_coil_m[{k}] = {m}",
+                   f"{st}_coil_Tin[{k}] = {T_sup}",
+                   f"{st}_coil_UA[{k}] = {p}[{UA}]")
+            coil_out = f"{st}_coil_Tout[{k}]"
         c.emit("volumes",
-               f"{T_ret} = {st}_coil_Tout[{k}] if {m} > 0.0 else {x}[{X_TRET}]",
+               f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X_TRET}]",
                f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
                f"{mod}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
                f"{x}[{X_EHEAT}] += {Q} * h",
@@ -263,3 +296,35 @@ class Kind(ComponentKind):
                f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{AREA}] * h",
                f"{c.ledger_entry(inst, 'heat')} += {S} * h",
                f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")
+        if valve:
+            e_up = c.state(inst, np.zeros(1), suffix="_valve")
+            c.emit("volumes", f"{e_up}[0] += {Q} * h if {side} else 0.0")
+            c.emit("signals",
+                   f"{sig('Q_flow_upper', 'W', 'heat given by the upper coil (0 while the valve is lower)')} = "
+                   f"{Q} if {side} else 0.0",
+                   f"{sig('E_heat_upper', 'J', 'heat given by the upper coil since the start')} = {e_up}[0]")
+
+    def _check_coils(self, c, inst, valve):
+        """Each coil runs downward (inlet above outlet); two coils need UA_upper and the upper coil
+        above the lower one; UA_upper without a second coil is a mistake."""
+        o = inst.options
+        for side in ("upper", "lower") if valve else ("",):
+            top, bottom = (f"{k}.{side}" if side else k for k in ("top", "bottom"))
+            t, b = o.get(top, o["top"]), o.get(bottom, o["bottom"])
+            if _number(t) and _number(b) and t < b:
+                c.problems.append(f"{inst.at(top)} = {t}: must be above {bottom} = {b}")
+        ua_up = inst.params.UA_upper
+        if valve and not ua_up > 0.0:
+            c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: two coils need the upper coil's conductance "
+                              "> 0 W/K (area x 675 W/(m2 K))")
+        if not valve and ua_up > 0.0:
+            c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: only with two coils, top = {{ upper = ..., "
+                              "lower = ... } and bottom = { upper = ..., lower = ... }")
+        if valve and isinstance(o["top"], dict) and _number(o["top"].get("upper")) and _number(o["top"].get("lower")) \
+                and o["top"]["upper"] <= o["top"]["lower"]:
+            c.problems.append(f"{inst.at('top.upper')} = {o['top']['upper']}: the upper coil's inlet must be above "
+                              f"the lower coil's, top.lower = {o['top']['lower']}")
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)

@@ -24,26 +24,10 @@ class Kind(ComponentKind):
              "supply": (REQUIRED, "height of the supply inlet [m], or { upper = ..., lower = ... }"),
              "return": (REQUIRED, "height of the return outlet [m], or { upper = ..., lower = ... }")}
 
-    def _heights(self, c, inst, key, st):
-        v = inst.options[key]
-        if isinstance(v, dict):
-            unknown = set(v) - {"upper", "lower"}
-            if unknown or set(v) != {"upper", "lower"}:
-                c.problems.append(f"{inst.at(key)} = {v!r}: a three-way valve needs {{ upper = ..., lower = ... }}")
-                return 0, 0
-            layers = []
-            for side in ("upper", "lower"):
-                inst.options[f"{key}.{side}"] = v[side]
-                inst.lines.setdefault(f"{key}.{side}", inst.lines.get(key))
-                layers.append(c.port_layer(inst, f"{key}.{side}", st))
-            return tuple(layers)
-        layer = c.port_layer(inst, key, st)
-        return layer, layer
-
     def emit(self, c, inst):
         st, gen = inst.options["storage"], c.instances[inst.options["generator"]]
-        sup = self._heights(c, inst, "supply", st)
-        ret = self._heights(c, inst, "return", st)
+        sup = c.port_layers(inst, "supply", st)
+        ret = c.port_layers(inst, "return", st)
         valve = isinstance(inst.options["supply"], dict) or isinstance(inst.options["return"], dict)
         p = c.param(inst, np.array([*sup, *ret], dtype=np.float64))
         ports = c.storage_ports(st)

@@ -33,7 +33,7 @@ def test_all_maps_are_shipped():
                          "dhw_station", "heat_pump_wolf_cha10", "heat_pump_wolf_bws1_10",
                          "boiler_wolf_cgb20", "boiler_wolf_cgb50", "chp_neotower5", "solar_station",
                          "solar_station_dhw", "electric_heater", "district_substation", "storage_io_house2",
-                         "heat_pump_wolf_cha10_house1"}
+                         "heat_pump_wolf_cha10_house1", "solar_station_house3"}
 
 
 SHIPPED_HOUSES = sorted({h for m in MAPS.values() for h in served(m) if (HOUSES / f"{h}.toml").exists()})

@@ -27,7 +27,7 @@ SERVED = {
                          "district_substation"},
     "house2": {"heat_pump_wolf_cha10", "boiler_wolf_cgb20", "solar_station", "storage_io_house2",
                "district_substation"},
-    "house3": {"heat_pump_wolf_bws1_10", "solar_station", "district_substation"},
+    "house3": {"heat_pump_wolf_bws1_10", "solar_station_house3", "district_substation"},
     "house4": {"boiler_wolf_cgb20", "electric_heater", "district_substation"},
     "house5": {"chp_neotower5", "boiler_wolf_cgb50", "district_substation"},
 }

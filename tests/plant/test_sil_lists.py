@@ -32,7 +32,7 @@ COMMANDS = {
     "house2": {"ASHP_Modulation_set": "heat_pump.y_set", "ASHP_A_V3_TL": "hp_valve.upper",
                "EB_EB_power_kW_set": "boiler.U_set", "ST_S_FW_ST_VL_set": "solar.m_flow_set"},
     "house3": {"GSHP_GSHP_on": "heat_pump.on", "GSHP_A_V3_TL": "hp_branch.upper",
-               "ST_S_FW_ST_VL_set": "solar.m_flow_set"},
+               "ST_S_FW_ST_VL_set": "solar.m_flow_set", "ST_A_V3_TL": "solar.upper"},
     "house4": {"EB_EB_power_kW_set": "boiler.U_set"},
     "house5": {"CHP_CHPon_off": "chp.on", "CHP_elPowerCHP_set": "chp.y_set", "EB_EB_power_kW_set": "boiler.U_set"},
 }
