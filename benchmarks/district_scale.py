@@ -6,8 +6,8 @@ tree (a trunk node per five houses, 20 m DN100 pipe pairs), substations on. Then
 
     district    `launch()` as `twin district run` does: broker, grid and N house processes
     standalone  the same N houses as N processes, each stepping the same exchange steps with the
-                same Runtime, meter reads and grid inputs held constant, released together
-                once all have loaded
+                same Runtime, meter reads and recording, grid inputs held constant, released
+                together once all have loaded
 
 and prints, per N:
     wall          launch of the first process to the exit of the last (imports, loads included)
@@ -47,12 +47,12 @@ def district_text(n: int) -> str:
 
 
 def child_standalone(district: str, name: str, steps: int) -> None:
-    """One house stepping alone: the federate's work without the engine."""
+    """One house stepping alone: the federate's work (recording included) without the engine."""
     from gateway.federation.house_federate import METERS, build
     from plant.grid.district import load_district
 
     d = load_district(district)
-    rt = build(d, d.house(name), None, tick=d.step)
+    rt = build(d, d.house(name), Path(district).parent / "alone", tick=d.step)
     house = rt.house
     print("ready", flush=True)
     sys.stdin.readline()
@@ -63,7 +63,9 @@ def child_standalone(district: str, name: str, steps: int) -> None:
         [house.get(m) for m in METERS]
         rt.clock.step(1)
         [house.get(m) for m in METERS]
-    print(json.dumps({"start": t0, "end": time.time()}), flush=True)
+    t1 = time.time()
+    rt.stop()
+    print(json.dumps({"start": t0, "end": t1}), flush=True)
 
 
 def standalone(district: Path, names: list[str], steps: int) -> dict:
