@@ -41,6 +41,7 @@ SI: dict[str, str] = {
     "temperature": "degC", "temperature difference": "K", "mass flow": "kg/s", "power": "W",
     "energy": "J", "fraction": "1", "voltage": "V", "time": "s", "irradiance": "W/m2",
     "conductance": "W/K", "heat capacity": "J/K", "length": "m", "volume": "m3", "pressure": "Pa",
+    "mass": "kg",
 }
 
 _EXACT: dict[str, tuple[Fraction, Fraction]] = {}  # factor and offset as exact fractions
@@ -77,6 +78,7 @@ UNITS: dict[str, Unit] = _table({
     "m": ("length", 1), "cm": ("length", Fraction(1, 100)), "mm": ("length", Fraction(1, 1000)),
     "m3": ("volume", 1), "l": ("volume", Fraction(1, 1000)),
     "Pa": ("pressure", 1), "kPa": ("pressure", 1000), "bar": ("pressure", 100000),
+    "kg": ("mass", 1), "t": ("mass", 1000),
 })
 
 #: (from, to) -> (factor, offset): conventions between kinds, allowed only with span=True
@@ -93,10 +95,11 @@ BASE: dict[str, tuple[str, dict[str, int]]] = {
     "irradiance": ("W/m2", {"kg": 1, "s": -3}), "conductance": ("W/K", {"kg": 1, "m": 2, "s": -3, "K": -1}),
     "heat capacity": ("J/K", {"kg": 1, "m": 2, "s": -2, "K": -1}), "length": ("m", {"m": 1}),
     "volume": ("m3", {"m": 3}), "pressure": ("Pa", {"kg": 1, "m": -1, "s": -2}),
+    "mass": ("kg", {"kg": 1}),
 }
 
 #: units the code itself holds values in (a device or column unit among these is kept as is)
-CODE_UNITS = ("degC", "K", "kg/s", "W", "J", "1", "V", "s", "h", "W/m2", "W/K", "J/K", "m", "m3", "Pa")
+CODE_UNITS = ("degC", "K", "kg/s", "W", "J", "1", "V", "s", "h", "W/m2", "W/K", "J/K", "m", "m3", "Pa", "kg")
 
 
 def unit(name: str, where: str = "") -> Unit:

@@ -32,9 +32,12 @@ def house_fmu(tmp_path_factory):
 
 def schedule(t):
     """The commands at communication point t: boiler at 10 V for 2 h, CHP on at full load,
-    heating circuit at 60 degC / 0.15 kg/s, no DHW charging."""
+    heating circuit at 60 degC / 0.15 kg/s, no DHW charging, the district-heating substation idle
+    on a 70/40 degC grid."""
     return {"chp.on": 1.0, "chp.y_set": 1.0, "boiler.U_set": 10.0 if t < 7200.0 else 0.0,
-            "dhw_pump.on": 0.0, "mixer.T_sup_set": 60.0, "mixer.m_flow_set": 0.15}
+            "dhw_pump.on": 0.0, "mixer.T_sup_set": 60.0, "mixer.m_flow_set": 0.15,
+            "substation.m_flow_set": 0.0, "substation.m_flow_grid_set": 0.0,
+            "substation.T_grid_sup": 70.0, "substation.T_grid_ret": 40.0}
 
 
 def native_run(names, seconds, controller="external", start=None, inputs=True):

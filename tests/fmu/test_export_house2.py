@@ -11,10 +11,12 @@ from tests.conftest import require_tool
 
 DT = 60.0
 #: heat pump on at full modulation into the upper port pair, back-up heater off, boiler at 6 V,
-#: solar pump off, heating circuit at 35 degC / 0.2 kg/s
+#: solar pump off, heating circuit at 35 degC / 0.2 kg/s, district-heating substation idle on a
+#: 70/40 degC grid
 COMMANDS = {"heat_pump.on": 1.0, "heat_pump.y_set": 1.0, "heat_pump.aux": 0.0, "hp_valve.upper": 1.0,
             "boiler.U_set": 6.0, "solar.on": 0.0, "solar.m_flow_set": 0.0, "mixer.T_sup_set": 35.0,
-            "mixer.m_flow_set": 0.2}
+            "mixer.m_flow_set": 0.2, "substation.m_flow_set": 0.0, "substation.m_flow_grid_set": 0.0,
+            "substation.T_grid_sup": 70.0, "substation.T_grid_ret": 40.0}
 
 
 @pytest.fixture(scope="module")
