@@ -5,13 +5,14 @@
     report = diagnose(rec, house="house1", out="report/")     # dict, also report/report.json
 
 Stages: replay (replay.py) -> locate (locate.py) -> hypothesise (effects/, search.py) ->
-fit and select (fit.py) -> report (report.py). Method and report.json schema: docs/diagnose.md.
+fit (fit.py) -> judge and select (verdict.py) -> report (report.py). Method and report.json schema: docs/diagnose.md.
 """
 from __future__ import annotations
 
 import time
 
 from . import fit, locate, parallel, recording_io, replay, search  # noqa: F401
+from . import verdict as verdict_mod
 from .context import Context
 from .effects import catalogue
 
@@ -23,8 +24,8 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     t0 = time.perf_counter()
     warnings = list(rec.warnings)
     warnings += replay.check(rec)
-    ctx = Context.build(rec, train_days=train_days)
     rp = replay.Replayer(rec, house)
+    ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
     sim_file = nominal_rows[:, ctx.cols]
@@ -47,7 +48,10 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     # locate
     t1 = time.perf_counter()
     affected = locate.mismatched_signals(ctx, sim0, ctx.held)
-    loc = {"windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],
+    loc = {"replay": {"plant": rp.plant_name, "cut": rp.cut.name if rp.cut else None,
+                      "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit},
+           "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
+           "windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],
            "mismatched_signals": affected}
     timing["locate"] = time.perf_counter() - t1
 
@@ -71,8 +75,8 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         r = results[i]
         log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
             f"held-out cost {r.held_cost:.4g}")
-    fit.judge(results, ctx, J0t, J0h)
-    verdict, best, twins, explained = fit.select(results, ctx, sim0, affected)
+    verdict_mod.judge(results, ctx, J0t, J0h)
+    verdict, best, twins, explained = verdict_mod.select(results, ctx, sim0, affected)
     timing["fit"] = time.perf_counter() - t2
 
     t3 = time.perf_counter()
@@ -85,6 +89,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc,
                         terms, warnings)
     rep["nominal_refit"] = _report.nominal_refit(nref, ctx, sim0, best)
+    _report.flag_bounds(rep, results)
     if out is not None:
         _report.write(rep, out, ctx, nominal_rows, best, plots=plots)
     timing["report"] = time.perf_counter() - t4

@@ -2,13 +2,17 @@
 
 The twin runs with controller="external": the four supervisory commands and the two heating-
 circuit set-points come from the recording (the same generator set-points in simulation and
-experiment, so control decisions cannot diverge). Weather, occupancy, household electricity and
-the DHW draw come from the twin's own profiles for the recording's start date; a recording that
-carries them is checked against the profiles (a warning when they differ).
+experiment, so control decisions cannot diverge). A recording that measures the heating circuit
+and the hot water taken is replayed on a cut (cut.py: those measured boundaries instead of the
+twin's building and DHW profiles, the mixing station alone between its measured interfaces);
+otherwise weather, occupancy, household electricity and the DHW draw come from the twin's own
+profiles for the recording's start date, and a recording that carries them is checked against
+the profiles (a warning when they differ).
 
 Between two samples the command may have changed anywhere in the interval: when it differs, the
 old value is held for the first half of the interval and the new one for the second half (an
-unbiased edge time, halving the timing error of a plain sample-and-hold).
+unbiased edge time, halving the timing error of a plain sample-and-hold). A measured boundary is
+bound the same way: a sample holds from the midpoint before it to the midpoint after it.
 """
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ import numpy as np
 
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
+from . import cut as cut_mod
 
 COMMANDS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set")
 # a command the recording may replace by a measured signal (with a warning)
@@ -46,6 +51,8 @@ def requirements() -> dict:
         "boundary conditions (optional; taken from the twin's profiles by date, checked if present)": list(BOUNDARY),
         "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
         "measured signals (compared; at least one required)": comparable(),
+        "measured boundaries (optional; what each signal enables)": [
+            f"{sig} -> {what}" for sig, what in cut_mod.requirements().items()],
     }
 
 
@@ -81,21 +88,61 @@ def check(rec) -> list[str]:
 
 
 class Replayer:
-    """Drive the twin with a recording's commands; `run(overrides)` -> simulated rows at the samples."""
+    """Drive the twin with a recording's commands (and, on a cut, its measured boundaries);
+    `run(overrides)` -> simulated rows at the samples, in house 1's catalogue order (NaN for the
+    signals the replayed plant does not simulate; a bound boundary column holds the recording)."""
 
     def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True):
         self.rec = rec
         self.house_name = house
         self.init_from_sensors = init_from_sensors
         self.t = rec.time
-        self.cmd = np.column_stack([rec.data[c] for c in COMMANDS])
-        self.idx = [CATALOGUE.index(c) for c in COMMANDS]
+        self.cut, self.circuit = cut_mod.select(rec, house)
+        removed = set(self.cut.removes) if self.cut else set()
+        self.removed = removed
+        self.plant_name = f"{house}_cut_{self.cut.name}" if self.cut else house
+        self.commands = [c for c in COMMANDS if c.split(".", 1)[0] not in removed]
+        bound = dict(self.cut.bindings) if self.cut else {}
+        self.names = self.commands + list(bound)
+        self.cmd = np.column_stack([rec.data[c] for c in self.commands] + [rec.data[s] for s in bound.values()])
+        self.bound = bound
         self.notes: list[str] = []
+        if self.cut:
+            self.notes.append(f"replayed on the cut {self.plant_name}: {self.cut.why}"
+                              + ("; the mixing station replayed alone between its measured interfaces"
+                                 if self.circuit else ""))
         self._checked = False
+        self._cache: tuple | None = None
         # re-fitted nominal parameters (fit.refit_nominal): applied to every run; a run's own
         # overrides take precedence over them
         self.base: dict = {}
         self.sensors = rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}
+        self._layout()
+
+    def _layout(self) -> None:
+        from ..compiler import catalogue_of
+
+        cat = catalogue_of(self.plant_name)
+        self._src, self._dst = [], []
+        inputs = set(self.bound)
+        simulated = []
+        for s in cat:
+            if s.name in CATALOGUE:
+                self._src.append(s.index)
+                self._dst.append(CATALOGUE.index(s.name))
+                if s.name not in inputs and s.causality == "output":
+                    simulated.append(s.name)
+        if self.circuit:
+            simulated += list(cut_mod.CIRCUIT_OUTPUTS)
+        self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
+
+    def instances(self) -> set:
+        """Instances a run's overrides may address: the replayed plant's, and the mixing
+        station's when it is replayed alone."""
+        from ..declaration import load
+
+        out = set(load(self.plant_name).instances)
+        return out | ({"mixer"} if self.circuit else set())
 
     def _init_storage(self, house) -> None:
         for comp in ("storage", "dhw_storage"):
@@ -116,19 +163,41 @@ class Replayer:
                 self.notes.append(f"{comp}: initial layer temperatures set from the first recorded sensor "
                                   f"values (twin default differed by up to {np.max(np.abs(meas - sim)):.1f} K)")
 
-    def run(self, overrides: dict | None = None, until: float | None = None) -> np.ndarray:
-        """Rows [n_samples, n_signals] (catalogue order) at the recording's sample times."""
+    def _plant(self, ov: dict, n: int) -> np.ndarray:
         from ..house import load_house
 
-        ov = {**self.sensors, **self.base, **(overrides or {})}
-        house = load_house(self.house_name, start=self.rec.start, controller="external",
-                           overrides=ov or None)
-        n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
+        key = (tuple(sorted((k, repr(v)) for k, v in ov.items())), n)
+        if self._cache is not None and self._cache[0] == key:
+            return self._cache[1]
+        house = load_house(self.plant_name, start=self.rec.start, controller="external", overrides=ov or None)
         if self.init_from_sensors:
-            for name, value in zip(COMMANDS, self.cmd[0]):
-                house.set(name, value)
+            for name, value in zip(self.names, self.cmd[0]):
+                if np.isfinite(value):
+                    house.set(name, value)
             self._init_storage(house)
-        out = house.drive(self.t[:n], COMMANDS, self.cmd[:n])
+        # commands and measured boundaries alike: a sample holds from the midpoints around it
+        rows = house.drive(self.t[:n], self.names, self.cmd[:n])
+        self._cache = (key, rows)
+        return rows
+
+    def run(self, overrides: dict | None = None, until: float | None = None) -> np.ndarray:
+        """Rows [n_samples, n_signals] (house 1's catalogue order) at the recording's sample times."""
+        ov = {**self.sensors, **self.base, **(overrides or {})}
+        n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
+        plant_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] not in self.removed}
+        sub_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] in self.removed}
+        lost = [k for k in sub_ov if not (self.circuit and k.startswith("mixer."))]
+        if lost:
+            raise ConfigError(f"replay on {self.plant_name}: override(s) {', '.join(lost)} address instances the "
+                              f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
+        rows_plant = self._plant(plant_ov, n)
+        out = np.full((n, len(CATALOGUE)), np.nan)
+        out[:, self._dst] = rows_plant[:, self._src]
+        for inp, sig in self.bound.items():
+            out[:, CATALOGUE.index(sig)] = self.rec.data[sig][:n]
+        if self.circuit:
+            for sig, v in cut_mod.replay_circuit(self.rec, self.house_name, sub_ov, n).items():
+                out[:, CATALOGUE.index(sig)] = v
         self._checked = True
         return out
 
@@ -139,7 +208,7 @@ class Replayer:
                 continue
             m = self.rec.data[b][: len(rows)]
             sim = rows[:, CATALOGUE.index(b)]
-            ok = np.isfinite(m)
+            ok = np.isfinite(m) & np.isfinite(sim)
             if not ok.any():
                 continue
             err = float(np.sqrt(np.mean((m[ok] - sim[ok]) ** 2)))

@@ -9,7 +9,9 @@ class HeatLoss(Effect):
     id = "heat_loss"
     component = "storage"
     kind = "simulate"
-    params = (Param("UA_loss", 2.0, 400.0, 20.0, "W/K", log=True),)
+    # the range starts at the file's value: a loss below it is calibration (fit.NOMINAL_REFIT),
+    # not a missing effect
+    params = (Param("UA_loss", 20.0, 400.0, 20.0, "W/K", log=True),)
     description = "heat loss of the heating storage to the plant room (storage.UA_loss)"
 
     def overrides(self, theta):
@@ -24,7 +26,7 @@ class HeaderHeatLoss(Effect):
     id = "pipe_heat_loss"
     component = "supply_header"
     kind = "simulate"
-    params = (Param("UA_loss", 0.1, 100.0, 1.0, "W/K", log=True),)
+    params = (Param("UA_loss", 1.0, 100.0, 1.0, "W/K", log=True),)  # from the file's value, as heat_loss
     description = "heat loss of the supply and return headers / connecting pipes (header UA_loss)"
 
     def overrides(self, theta):

@@ -1,0 +1,142 @@
+"""Which part of the house a recording lets the diagnosis replay alone: cuts and subsystems.
+
+A recording that measures the heating circuit's building side (flow, supply after mixing,
+return) and the hot water taken is replayed on the cut house `<house>_cut_circuit.toml`: the
+generators, the hydraulic switch, both storages and the DHW coil run on the recorded commands,
+while the circuit and the tap are measured boundaries (plant/connections/measured.py). The twin's
+own building, room, weather and hot-water profiles then no longer enter the storage's energy
+balance, so a load the profiles get wrong cannot drift it (issue 13: 10-12 K storage RMSE on an
+independent recording from load differences alone). A recording without them is replayed on the
+whole house, as before.
+
+The mixing station, cut out of the plant, is replayed on its own between its measured interfaces
+(`circuit`): the twin's kernel (plant/components/mixing_station.step) driven by the recorded
+set-points, the measured supply-header temperature (switch.T_sup) and circuit return
+(mixer.T_ret), giving the supply after mixing (mixer.T_sup) and the circuit flow: a fault of the
+circuit (a leaking valve) shows there and nowhere else. Its parameters are the declaration's
+`mixer` instance with the run's overrides (`mixer.leak`), so a candidate sets them the same way
+on the whole house and on the cut.
+
+Every comparable signal belongs to one subsystem (SUBSYSTEM): the report localises the mismatch
+per subsystem.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from ..components import mixing_station
+from ..schedule import n_steps
+
+
+@dataclass(frozen=True)
+class Cut:
+    name: str            # the cut house is f"{house}_cut_{name}"
+    removes: tuple       # instances of the whole house the measured boundaries replace
+    bindings: dict       # input of the cut house -> the recorded signal it follows
+    why: str
+
+
+CUTS = (
+    Cut("circuit", ("mixer", "radiator", "zone", "thermostat", "dhw"),
+        {"mixer.m_flow": "mixer.m_flow", "mixer.T_sup": "mixer.T_sup", "mixer.T_return": "mixer.T_ret",
+         "dhw.m_flow_hot": "dhw.m_flow_hot"},
+        "heating circuit (measured flow, supply and return) and hot-water draw (measured) as boundaries: "
+        "the storage no longer depends on the twin's building, room, weather and DHW profiles"),
+)
+
+# the mixing station alone: recorded set-points and measured interfaces -> its outputs
+CIRCUIT_INPUTS = ("mixer.T_sup_set", "mixer.m_flow_set", "switch.T_sup", "mixer.T_ret")
+CIRCUIT_OUTPUTS = ("mixer.T_sup", "mixer.m_flow", "mixer.y_valve")
+
+SUBSYSTEM = {"chp": "generators", "boiler": "generators", "switch": "coupling point", "supply_header":
+             "coupling point", "return_header": "coupling point", "storage": "storage", "dhw_storage": "hot water",
+             "dhw_pump": "hot water", "dhw": "hot water", "mixer": "heating circuit", "radiator": "heating circuit",
+             "zone": "room"}
+
+
+def subsystem(signal: str) -> str:
+    return SUBSYSTEM.get(signal.split(".", 1)[0], "other")
+
+
+def select(rec, house: str):
+    """The first cut whose recorded signals the recording holds and whose house file exists
+    (None: the whole house), and whether the mixing station can be replayed alone."""
+    from ..errors import ConfigError
+    from ..housefile import resolve
+
+    for cut in CUTS:
+        if not all(rec.has(s) for s in cut.bindings.values()):
+            continue
+        try:
+            resolve(f"{house}_cut_{cut.name}")
+        except ConfigError:  # no cut file for this house: replay the whole house
+            continue
+        circuit = "mixer" in cut.removes and all(rec.has(s) for s in CIRCUIT_INPUTS)
+        return cut, circuit
+    return None, False
+
+
+def requirements() -> dict:
+    """What each recorded signal enables (twin diagnose --requirements)."""
+    out = {}
+    for cut in CUTS:
+        for inp, sig in cut.bindings.items():
+            out.setdefault(sig, []).append(f"cut '{cut.name}' (binds {inp}; all of "
+                                           f"{', '.join(cut.bindings.values())} needed)")
+    for s in CIRCUIT_INPUTS:
+        out.setdefault(s, []).append("the mixing station replayed alone (needs the circuit cut and "
+                                     f"{', '.join(CIRCUIT_INPUTS)}): compares {', '.join(CIRCUIT_OUTPUTS[:2])}")
+    out.setdefault("weather.T_air", []).append("checked against the twin's weather profile; drives the "
+                                               "room only in the whole-house replay (no cut)")
+    out.setdefault("zone.T_room", []).append("compared in the whole-house replay; with the circuit cut the "
+                                             "room is outside the replayed plant")
+    return {s: "; ".join(v) for s, v in out.items()}
+
+
+def _filled(v: np.ndarray) -> np.ndarray:
+    """NaN samples hold the last finite value (the first finite one before it)."""
+    v = np.asarray(v, dtype=np.float64)
+    ok = np.isfinite(v)
+    if ok.all() or not ok.any():
+        return np.nan_to_num(v)
+    idx = np.where(ok, np.arange(len(v)), np.flatnonzero(ok)[0])
+    np.maximum.accumulate(idx, out=idx)
+    return v[idx]
+
+
+@njit(cache=True)
+def _circuit_run(times, T_set, m_set, T_prim, T_ret, x, p, out):
+    """The mixing station over the samples: set-points held (a change from the interval's
+    midpoint, as the plant's replay), measured interfaces linear between samples; out[i] =
+    (T_sup after mixing, circuit flow, valve share) at sample i."""
+    m, mp, T, y = mixing_station.step(0.0, x, p, T_set[0], m_set[0], T_prim[0], T_ret[0])
+    out[0, 0], out[0, 1], out[0, 2] = T, m, y
+    for i in range(1, times.shape[0]):
+        t0, t1 = times[i - 1], times[i]
+        n = n_steps(t1 - t0)
+        h = (t1 - t0) / n
+        for k in range(n):
+            w = (k + 0.5) / n
+            j = i - 1 if (w < 0.5 and (T_set[i] != T_set[i - 1] or m_set[i] != m_set[i - 1])) else i
+            Tp = T_prim[i - 1] * (1.0 - w) + T_prim[i] * w
+            Tr = T_ret[i - 1] * (1.0 - w) + T_ret[i] * w
+            m, mp, T, y = mixing_station.step(h, x, p, T_set[j], m_set[j], Tp, Tr)
+        out[i, 0], out[i, 1], out[i, 2] = T, m, y
+
+
+def replay_circuit(rec, house: str, overrides: dict, n: int) -> dict:
+    """The mixing station of `house` (with the `mixer.*` overrides) replayed alone over the
+    first n samples -> {signal: values} for CIRCUIT_OUTPUTS."""
+    from ..component import pack
+    from ..declaration import load
+
+    spec = load(house, {k: v for k, v in overrides.items() if k.startswith("mixer.")} or None)
+    p = pack(spec.instances["mixer"].params)
+    x = mixing_station.initial_state(spec.instances["mixer"].params)
+    cols = [_filled(rec.data[s][:n]) for s in CIRCUIT_INPUTS]
+    out = np.empty((n, 3))
+    _circuit_run(np.ascontiguousarray(rec.time[:n], dtype=np.float64), *cols, x, p, out)
+    return dict(zip(CIRCUIT_OUTPUTS, out.T))

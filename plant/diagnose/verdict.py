@@ -1,0 +1,155 @@
+"""Judge every fitted candidate on the held-out window and reach the verdict.
+
+Selection (the held-out gate keeps the null case honest):
+  * accepted: held-out cost below nominal by >= MIN_GAIN (relative) AND the BIC on the training
+    window (n_eff, see Context.n_eff) better than nominal AND no fitted parameter on a bound of
+    its range; a sensor candidate on a storage sensor is judged on that sensor's residual
+    relative to its neighbours instead (_judge_local, LOCAL_GAIN);
+  * the accepted candidates are ranked by held-out gain; when a mismatch well above the replay's
+    accuracy (locate.beyond_tolerance) remains after the best, it must have removed at least
+    EXPLAIN of the nominal held-out excess (above the sensor-noise floor) of the mismatched
+    signals it moves, else the verdict is "unexplained mismatch";
+  * a candidate whose held-out cost is within 25 % of the best and whose fitted simulation differs
+    from the best's by less than the best's remaining misfit is reported as indistinguishable.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .fit import LOCAL_GAIN, at_bound
+
+MIN_GAIN = 0.10
+EXPLAIN = 0.60
+PARSIMONY = 0.02
+
+
+def bic(cost: float, n_eff: float, k: int) -> float:
+    return n_eff * math.log(max(cost, 1e-12)) + k * math.log(n_eff)
+
+
+def judge(results, ctx, nominal_train, nominal_held) -> None:
+    n_eff = ctx.n_eff(ctx.train)
+    b0 = bic(nominal_train, n_eff, 0)
+    for r in results:
+        if not r.plausible or r.sim is None:
+            continue
+        r.held_gain = 1.0 - r.held_cost / nominal_held if nominal_held > 0 else 0.0
+        r.bic = bic(r.train_cost, n_eff, r.k)
+        free = r.effect.fitted(ctx) if r.kind == "simulate" else range(len(r.theta))
+        r.at_bound = [r.effect.params[i].name for i in free
+                      if at_bound(r.effect.params[i], r.theta[i]) and r.theta[i] != r.effect.params[i].nominal]
+        if r.local is not None:
+            _judge_local(r, ctx, n_eff)
+            continue
+        if r.held_gain < MIN_GAIN:
+            r.reason = (f"held-out cost {r.held_cost:.4g} vs nominal {nominal_held:.4g}: "
+                        f"gain {r.held_gain * 100:.1f} % < {MIN_GAIN * 100:.0f} %; rejected")
+        elif r.bic >= b0:
+            r.reason = f"BIC {r.bic:.1f} not better than nominal {b0:.1f}; rejected"
+        elif r.at_bound:
+            r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {', '.join(r.at_bound)} ended on a bound of "
+                        "its range: the candidate absorbs a mismatch it cannot represent; rejected")
+        else:
+            r.accepted = True
+            r.reason = f"held-out gain {r.held_gain * 100:.1f} %, BIC {r.bic:.1f} < {b0:.1f}"
+
+
+def _judge_local(r, ctx, n_eff) -> None:
+    """A sensor candidate on an array sensor: accepted when the sensor's held-out residual
+    relative to its neighbours is a mismatch (RMS above 0.3 x scale + 3 noise sigma, as
+    locate.mismatched_signals) and the effect removes >= LOCAL_GAIN of it, with a better BIC on
+    that residual and its parameter inside its range."""
+    d = r.local
+    r.held_gain = d["gain"]
+    b0 = bic(d["heldout_rms_before"] ** 2, n_eff, 0)
+    r.bic = bic(d["heldout_rms_after"] ** 2, n_eff, r.k)
+    what = f"{r.signal} relative to {', '.join(d['neighbours'])}"
+    if d["heldout_rms_before"] <= d["limit"]:
+        r.reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
+                    "no sensor-own mismatch; rejected")
+    elif d["gain"] < LOCAL_GAIN:
+        r.reason = f"{what}: removes {d['gain'] * 100:.0f} % < {LOCAL_GAIN * 100:.0f} % of its residual; rejected"
+    elif r.bic >= b0:
+        r.reason = f"{what}: BIC {r.bic:.1f} not better than {b0:.1f}; rejected"
+    elif r.at_bound:
+        r.reason = f"{what}: {', '.join(r.at_bound)} ended on a bound of its range; rejected"
+    else:
+        r.accepted = True
+        r.reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} -> {d['heldout_rms_after']:.3g} "
+                    f"(gain {d['gain'] * 100:.0f} %), BIC {r.bic:.1f} < {b0:.1f}")
+
+
+def select(results, ctx, nominal_sim, affected):
+    """-> (verdict, best Result or None, indistinguishable ids, explained share).
+
+    affected: signals with a mismatch beyond replay and sensor accuracy
+    (locate.mismatched_signals). Without any such signal there is nothing to explain:
+    no_missing_physics, even if a candidate trims the replay's timing noise by more than
+    MIN_GAIN. Parsimony: a candidate with fewer fitted parameters whose held-out cost is within
+    PARSIMONY of the best replaces it. The explained share is measured on the affected signals
+    the best candidate moves (held-out MSE changed by >= MOVED): a valve leak is judged on the
+    heating circuit it changes, not on a storage mismatch it cannot touch. The best accepted
+    candidate is named unless it removes < EXPLAIN of the excess AND leaves a signal well above
+    the replay's accuracy (locate.beyond_tolerance): then the verdict is unexplained_mismatch.
+    Within that accuracy the rest of the excess is the replay's own (an independent plant differs
+    by a few K anyway). With no candidate accepted: unexplained_mismatch when the nominal mismatch
+    is beyond that accuracy, else no_missing_physics."""
+    from .locate import beyond_tolerance
+
+    # ranked by held-out gain: a sensor candidate's on its own residual relative to its
+    # neighbours, a plant candidate's on the whole cost
+    acc = sorted([r for r in results if r.accepted], key=lambda r: -r.held_gain)
+    if not affected:
+        return "no_missing_physics", None, [], 0.0
+    beyond = beyond_tolerance(ctx, nominal_sim, ctx.held)
+    unexplained = "unexplained_mismatch" if beyond else "no_missing_physics"
+    if not acc:
+        return unexplained, None, [], 0.0
+    best = acc[0]
+    for r in acc[1:]:
+        if r.k < best.k and r.held_gain >= acc[0].held_gain - PARSIMONY and r.local is None and best.local is None:
+            best = r
+    idx = [ctx.measured.index(s) for s in affected]
+    if best.kind == "simulate" or best.local is not None:
+        # a plant candidate acts on the subsystems it moves; a storage-sensor candidate was judged
+        # relative to its neighbours; a sensor candidate on any other signal answers for all of it
+        idx = moved(ctx, nominal_sim, best.sim, idx)
+    explained = explained_share(ctx, nominal_sim, best.sim, idx)
+    twins = []
+    for r in acc:
+        if r is best:
+            continue
+        d = _sim_distance(ctx, best.sim, r.sim)
+        if r.held_cost <= 1.25 * best.held_cost + 0.02 and d <= max(best.held_cost, 0.02):
+            twins.append(r.id)
+    if explained < EXPLAIN and beyond_tolerance(ctx, best.sim, ctx.held):
+        return "unexplained_mismatch", best, twins, explained
+    return "missing_physics", best, twins, explained
+
+
+MOVED = 0.10
+
+
+def moved(ctx, nominal_sim, sim, idx) -> list:
+    """The signals of idx whose held-out MSE the fitted simulation changes by >= MOVED."""
+    mse0 = ctx.per_signal_mse(nominal_sim, ctx.held)
+    mse1 = ctx.per_signal_mse(sim, ctx.held)
+    out = [j for j in idx if abs(mse1[j] - mse0[j]) >= MOVED * max(mse0[j], 1e-12)]
+    return out or list(idx)
+
+
+def explained_share(ctx, nominal_sim, sim, idx) -> float:
+    """Share of the nominal held-out excess (above the sensor-noise floor) of the signals idx
+    that the fitted simulation removes."""
+    mse0 = ctx.per_signal_mse(nominal_sim, ctx.held)[idx] / ctx.scale[idx] ** 2
+    mse1 = ctx.per_signal_mse(sim, ctx.held)[idx] / ctx.scale[idx] ** 2
+    floor = (ctx.noise[idx] / ctx.scale[idx]) ** 2
+    return float(np.nansum(mse0 - mse1) / max(np.nansum(mse0 - floor), 1e-12))
+
+
+def _sim_distance(ctx, a, b):
+    d = (a - b)[ctx.held]
+    v = np.nanmean(d ** 2, axis=0) / ctx.scale ** 2
+    return float(np.nanmean(v))
