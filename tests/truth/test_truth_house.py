@@ -61,7 +61,11 @@ def test_ideal_mode_reproduces_the_twin():
     _, a = tw.run(6 * 3600.0, dt=1.0, out_interval=600.0)
     _, b = tr.run(6 * 3600.0, dt=1.0, out_interval=600.0)
     b = b[:, [tr.catalogue.index(n) for n in tw.catalogue.names]]  # the truth has more signals
-    assert np.allclose(a, b, rtol=1e-9, atol=1e-6)
+    # the truth's substation is feed-in only (its pressure-driven switch takes two generators):
+    # idle, its house-side readings show the supply header where the twin's show the return's
+    same = [j for j, n in enumerate(tw.catalogue.names) if n not in ("substation.T_sup", "substation.T_ret")]
+    assert len(same) == len(tw.catalogue.names) - 2
+    assert np.allclose(a[:, same], b[:, same], rtol=1e-9, atol=1e-6)
 
 
 def test_sensor_lag_and_inlet_mixing_options():
