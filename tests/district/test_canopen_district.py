@@ -1,8 +1,6 @@
 """A CANopen master commands house 1's district-heating substation in a running district: the
 master and the house process share a CAN bus through `twin can-hub` (socketcand over TCP), the
 house process talks to the grid process through the engine, and the grid books the extraction."""
-import subprocess
-import sys
 import time
 
 import canopen
@@ -15,6 +13,8 @@ from gateway.transports.can_hub import CanHub
 from gateway.transports.canopen_od import build_object_dictionary
 from profiles.recording import read_recording
 
+from .serving import serve
+
 SPEED = 300.0
 DAYS = 0.04         # 57.6 min: 11.5 s of wall time
 
@@ -22,8 +22,7 @@ DAYS = 0.04         # 57.6 min: 11.5 s of wall time
 def test_a_canopen_master_commands_a_substation_of_a_running_district(tmp_path):
     hub = CanHub(port=0).start()
     try:
-        district = tmp_path / "district.toml"
-        district.write_text(f"""
+        twin, out = serve(tmp_path, f"""
 [district]
 name = "candistrict"
 step = 60.0
@@ -37,17 +36,8 @@ node = "n1"
 substation = "off"            # the substation waits for the master's commands
 modbus_port = {free_port()}
 can = "{hub.spec}"
-""")
-        out = tmp_path / "run"
-        twin = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "district", "serve", str(district),
-                                 "--days", str(DAYS), "--speed", str(SPEED), "--out", str(out)],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        log = out / "logs" / "house1.log"
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline and not (log.exists() and "serving modbus-tcp" in log.read_text()):
-            assert twin.poll() is None, twin.communicate()
-            time.sleep(0.1)
-        assert f"canopen {hub.spec}" in log.read_text()
+""", DAYS, SPEED)
+        assert f"canopen {hub.spec}" in (out / "logs" / "house1.log").read_text()
         dmap = load_all()["district_substation"]
         master = canopen.Network(open_bus(hub.spec))
         master.connect()

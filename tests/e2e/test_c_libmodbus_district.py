@@ -1,13 +1,13 @@
 """The C libmodbus controller runs house 1 of a running district (`twin district serve`, paced)
 while house 2 runs its built-in controllers; both houses and the grid are their own processes."""
 import subprocess
-import sys
-import time
 
 import numpy as np
 
 from gateway.federation.engine import free_port
 from profiles.recording import read_recording
+
+from tests.district.serving import serve
 
 from .test_c_libmodbus import build_tools, controller_bin  # noqa: F401 (fixtures: build the example)
 
@@ -18,8 +18,7 @@ PERIOD_MS = 250     # the controller scans every 60 simulated seconds
 
 def test_c_controller_runs_one_house_of_a_district(tmp_path, controller_bin):  # noqa: F811
     p1, p2 = free_port(), free_port()
-    district = tmp_path / "district.toml"
-    district.write_text(f"""
+    twin, out = serve(tmp_path, f"""
 [district]
 name = "cdistrict"
 step = 60.0
@@ -39,17 +38,8 @@ overrides = {{ "storage.T_init_top" = 62.0 }}   # below the controller's CHP thr
 [houses.house2]
 node = "n2"
 modbus_port = {p2}
-""")
-    out = tmp_path / "run"
-    twin = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "district", "serve", str(district),
-                             "--days", str(DAYS), "--speed", str(SPEED), "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    log = out / "logs" / "house1.log"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and not (log.exists() and "serving modbus-tcp" in log.read_text()):
-        assert twin.poll() is None, twin.communicate()
-        time.sleep(0.1)
-    assert f"serving modbus-tcp 127.0.0.1:{p1}" in log.read_text()
+""", DAYS, SPEED)
+    assert f"serving modbus-tcp 127.0.0.1:{p1}" in (out / "logs" / "house1.log").read_text()
     scans = int(DAYS * 86400 / 60) - 12     # stop before the district does
     ctl = subprocess.run([str(controller_bin), "-p", str(p1), "--period", str(PERIOD_MS), "--cycles", str(scans)],
                          capture_output=True, text=True, timeout=120)
