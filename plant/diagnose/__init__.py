@@ -40,6 +40,9 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
     ctx.nominal_rows = nominal_rows  # the replayed states, for candidates' plausible()
+    ctx.nominal_sim = sim0
+    # the subsystems replayed alone between measured interfaces: candidates on them are judged there
+    ctx.alone = {"instances": {"mixer"}, "signals": list(replay.cut_mod.CIRCUIT_OUTPUTS)} if rp.circuit else None
     J0t, J0h = ctx.cost(sim0, ctx.train), ctx.cost(sim0, ctx.held)
     timing["replay_nominal"] = time.perf_counter() - t0
     log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "

@@ -74,6 +74,8 @@ class Context:
     flags: dict = field(default_factory=dict)
     cols: np.ndarray | None = None  # catalogue indices of the measured signals
     nominal_rows: np.ndarray | None = None  # the nominal replay, all catalogue signals (set by diagnose)
+    nominal_sim: np.ndarray | None = None   # its measured columns (the baseline every candidate is judged on)
+    alone: dict | None = None               # {instances, signals} of a subsystem replayed alone (diagnose)
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None):

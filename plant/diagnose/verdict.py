@@ -4,7 +4,8 @@ Selection (the held-out gate keeps the null case honest):
   * accepted: held-out cost below nominal by >= MIN_GAIN (relative) AND the BIC on the training
     window (n_eff, see Context.n_eff) better than nominal AND no fitted parameter on a bound of
     its range; a sensor candidate on a storage sensor is judged on that sensor's residual
-    relative to its neighbours instead (_judge_local, LOCAL_GAIN);
+    relative to its neighbours instead, a candidate on the mixing station replayed alone on that
+    subsystem's outputs (_judge_local, _alone, LOCAL_GAIN);
   * the accepted candidates are ranked by held-out gain; when a mismatch well above the replay's
     accuracy (locate.beyond_tolerance) remains after the best, it must have removed at least
     EXPLAIN of the nominal held-out excess (above the sensor-noise floor) of the mismatched
@@ -40,6 +41,8 @@ def judge(results, ctx, nominal_train, nominal_held) -> None:
         free = r.effect.fitted(ctx) if r.kind == "simulate" else range(len(r.theta))
         r.at_bound = [r.effect.params[i].name for i in free
                       if at_bound(r.effect.params[i], r.theta[i]) and r.theta[i] != r.effect.params[i].nominal]
+        if r.local is None and r.kind == "simulate":
+            r.local = _alone(r, ctx)
         if r.local is not None:
             _judge_local(r, ctx, n_eff)
             continue
@@ -56,16 +59,39 @@ def judge(results, ctx, nominal_train, nominal_held) -> None:
             r.reason = f"held-out gain {r.held_gain * 100:.1f} %, BIC {r.bic:.1f} < {b0:.1f}"
 
 
+def _alone(r, ctx) -> dict | None:
+    """A plant candidate whose overrides all address a subsystem replayed alone between measured
+    interfaces (the mixing station, cut.replay_circuit) is judged on that subsystem's outputs: a
+    residual there is the subsystem's own, while the rest of the cost carries the plant
+    replay's differences it cannot touch."""
+    alone = ctx.alone
+    if not alone:
+        return None
+    keys = r.effect.overrides([p.nominal for p in r.effect.params])
+    if not keys or any(k.split(".", 1)[0] not in alone["instances"] for k in keys):
+        return None
+    idx = [ctx.measured.index(s) for s in alone["signals"] if s in ctx.measured]
+    if not idx:
+        return None
+    sc = ctx.scale[idx] ** 2
+    c0 = float(np.nanmean(ctx.per_signal_mse(ctx.nominal_sim, ctx.held)[idx] / sc))
+    c1 = float(np.nanmean(ctx.per_signal_mse(r.sim, ctx.held)[idx] / sc))
+    lim = float(np.mean(0.3 + 3.0 * ctx.noise[idx] / ctx.scale[idx]))
+    return {"heldout_rms_before": math.sqrt(c0), "heldout_rms_after": math.sqrt(c1),
+            "gain": 1.0 - c1 / max(c0, 1e-12), "limit": lim, "neighbours": [],
+            "what": f"{', '.join(ctx.measured[j] for j in idx)} (replayed alone)"}
+
+
 def _judge_local(r, ctx, n_eff) -> None:
-    """A sensor candidate on an array sensor: accepted when the sensor's held-out residual
-    relative to its neighbours is a mismatch (RMS above 0.3 x scale + 3 noise sigma, as
+    """A sensor candidate on an array sensor (or a plant candidate on a subsystem replayed alone,
+    _alone): accepted when the sensor's held-out residual relative to its neighbours is a mismatch (RMS above 0.3 x scale + 3 noise sigma, as
     locate.mismatched_signals) and the effect removes >= LOCAL_GAIN of it, with a better BIC on
     that residual and its parameter inside its range."""
     d = r.local
     r.held_gain = d["gain"]
     b0 = bic(d["heldout_rms_before"] ** 2, n_eff, 0)
     r.bic = bic(d["heldout_rms_after"] ** 2, n_eff, r.k)
-    what = f"{r.signal} relative to {', '.join(d['neighbours'])}"
+    what = d.get("what") or f"{r.signal} relative to {', '.join(d['neighbours'])}"
     if d["heldout_rms_before"] <= d["limit"]:
         r.reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
                     "no sensor-own mismatch; rejected")
