@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..components import mixing_station
+from ..components import mixing_station, radiator
 from ..schedule import n_steps
 
 
@@ -50,6 +50,12 @@ CUTS = (
 # the mixing station alone: recorded set-points and measured interfaces -> its outputs
 CIRCUIT_INPUTS = ("mixer.T_sup_set", "mixer.m_flow_set", "switch.T_sup", "mixer.T_ret")
 CIRCUIT_OUTPUTS = ("mixer.T_sup", "mixer.m_flow", "mixer.y_valve")
+
+# the radiator circuit alone: measured circuit flow, supply after mixing and room -> its return.
+# A delayed or lagging return sensor (the circuit return is otherwise a cut boundary, compared
+# nowhere) then shows as a mismatch of mixer.T_ret, which a sensor candidate can explain.
+RADIATOR_INPUTS = ("mixer.m_flow", "mixer.T_sup", "zone.T_room")
+RADIATOR_OUTPUTS = ("mixer.T_ret",)
 
 SUBSYSTEM = {"chp": "generators", "boiler": "generators", "switch": "coupling point", "supply_header":
              "coupling point", "return_header": "coupling point", "storage": "storage", "dhw_storage": "hot water",
@@ -79,6 +85,11 @@ def select(rec, house: str):
     return None, False
 
 
+def radiator_alone(rec, cut) -> bool:
+    """Whether the radiator circuit can be replayed alone (the circuit cut and its inputs recorded)."""
+    return cut is not None and "radiator" in cut.removes and all(rec.has(s) for s in RADIATOR_INPUTS + RADIATOR_OUTPUTS)
+
+
 def requirements() -> dict:
     """What each recorded signal enables (twin diagnose --requirements)."""
     out = {}
@@ -89,6 +100,9 @@ def requirements() -> dict:
     for s in CIRCUIT_INPUTS:
         out.setdefault(s, []).append("the mixing station replayed alone (needs the circuit cut and "
                                      f"{', '.join(CIRCUIT_INPUTS)}): compares {', '.join(CIRCUIT_OUTPUTS[:2])}")
+    for s in RADIATOR_INPUTS:
+        out.setdefault(s, []).append("the radiator circuit replayed alone (needs the circuit cut and "
+                                     f"{', '.join(RADIATOR_INPUTS)}): compares {', '.join(RADIATOR_OUTPUTS)}")
     out.setdefault("weather.T_air", []).append("checked against the twin's weather profile; drives the "
                                                "room only in the whole-house replay (no cut)")
     out.setdefault("zone.T_room", []).append("compared in the whole-house replay; with the circuit cut the "
@@ -140,3 +154,38 @@ def replay_circuit(rec, house: str, overrides: dict, n: int) -> dict:
     out = np.empty((n, 3))
     _circuit_run(np.ascontiguousarray(rec.time[:n], dtype=np.float64), *cols, x, p, out)
     return dict(zip(CIRCUIT_OUTPUTS, out.T))
+
+
+@njit(cache=True)
+def _radiator_run(times, m, T_sup, T_room, x, p, out):
+    """The radiators' water node over the samples, measured interfaces linear between samples;
+    out[i] = the return temperature at sample i."""
+    out[0] = x[0]
+    for i in range(1, times.shape[0]):
+        t0, t1 = times[i - 1], times[i]
+        n = n_steps(t1 - t0)
+        h = (t1 - t0) / n
+        for k in range(n):
+            w = (k + 0.5) / n
+            radiator.step(h, x, p, m[i - 1] * (1.0 - w) + m[i] * w, T_sup[i - 1] * (1.0 - w) + T_sup[i] * w,
+                          T_room[i - 1] * (1.0 - w) + T_room[i] * w)
+        out[i] = x[0]
+
+
+def replay_radiator(rec, house: str, overrides: dict, n: int) -> dict:
+    """The radiator circuit of `house` (with the `radiator.*` overrides) replayed alone over the
+    first n samples from the measured circuit flow, supply and room -> {mixer.T_ret: values}.
+    The water node starts at the first recorded return."""
+    from ..component import pack
+    from ..declaration import load
+
+    spec = load(house, {k: v for k, v in overrides.items() if k.startswith("radiator.")} or None)
+    p = pack(spec.instances["radiator"].params)
+    x = radiator.initial_state(spec.instances["radiator"].params)
+    T0 = _filled(rec.data["mixer.T_ret"][:n])[0]
+    if np.isfinite(T0):
+        x[0] = T0
+    cols = [_filled(rec.data[s][:n]) for s in RADIATOR_INPUTS]
+    out = np.empty(n)
+    _radiator_run(np.ascontiguousarray(rec.time[:n], dtype=np.float64), *cols, x, p, out)
+    return {"mixer.T_ret": out}

@@ -98,6 +98,7 @@ class Replayer:
         self.init_from_sensors = init_from_sensors
         self.t = rec.time
         self.cut, self.circuit = cut_mod.select(rec, house)
+        self.radiator = cut_mod.radiator_alone(rec, self.cut)
         removed = set(self.cut.removes) if self.cut else set()
         self.removed = removed
         self.plant_name = f"{house}_cut_{self.cut.name}" if self.cut else house
@@ -110,7 +111,9 @@ class Replayer:
         if self.cut:
             self.notes.append(f"replayed on the cut {self.plant_name}: {self.cut.why}"
                               + ("; the mixing station replayed alone between its measured interfaces"
-                                 if self.circuit else ""))
+                                 if self.circuit else "")
+                              + ("; the radiator circuit replayed alone (measured flow, supply and room "
+                                 "-> return)" if self.radiator else ""))
         self._checked = False
         self._cache: tuple | None = None
         # re-fitted nominal parameters (fit.refit_nominal): applied to every run; a run's own
@@ -134,6 +137,8 @@ class Replayer:
                     simulated.append(s.name)
         if self.circuit:
             simulated += list(cut_mod.CIRCUIT_OUTPUTS)
+        if self.radiator:
+            simulated += list(cut_mod.RADIATOR_OUTPUTS)
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
 
     def instances(self) -> set:
@@ -142,7 +147,7 @@ class Replayer:
         from ..declaration import load
 
         out = set(load(self.plant_name).instances)
-        return out | ({"mixer"} if self.circuit else set())
+        return out | ({"mixer"} if self.circuit else set()) | ({"radiator"} if self.radiator else set())
 
     def _init_storage(self, house) -> None:
         for comp in ("storage", "dhw_storage"):
@@ -186,7 +191,8 @@ class Replayer:
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         plant_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] not in self.removed}
         sub_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] in self.removed}
-        lost = [k for k in sub_ov if not (self.circuit and k.startswith("mixer."))]
+        lost = [k for k in sub_ov if not ((self.circuit and k.startswith("mixer."))
+                                          or (self.radiator and k.startswith("radiator.")))]
         if lost:
             raise ConfigError(f"replay on {self.plant_name}: override(s) {', '.join(lost)} address instances the "
                               f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
@@ -197,6 +203,9 @@ class Replayer:
             out[:, CATALOGUE.index(sig)] = self.rec.data[sig][:n]
         if self.circuit:
             for sig, v in cut_mod.replay_circuit(self.rec, self.house_name, sub_ov, n).items():
+                out[:, CATALOGUE.index(sig)] = v
+        if self.radiator:
+            for sig, v in cut_mod.replay_radiator(self.rec, self.house_name, sub_ov, n).items():
                 out[:, CATALOGUE.index(sig)] = v
         self._checked = True
         return out

@@ -133,6 +133,22 @@ def select(results, ctx, nominal_sim, affected):
     unexplained = "unexplained_mismatch" if beyond else "no_missing_physics"
     if not acc:
         return unexplained, None, [], 0.0
+    # a candidate that leaves an energy or flow signal it moves outside Guideline 14's hourly
+    # acceptance has not explained that signal (G14 is the calibration criterion for metered
+    # energy and flow, beyond_tolerance): it is not named; the next accepted one is tried
+    first = acc[0]
+    idx_aff = [ctx.measured.index(s) for s in affected]
+    named = []
+    for r in acc:
+        left = g14_left(ctx, nominal_sim, r, idx_aff)
+        if left:
+            r.reason = (r.reason or "") + f"; leaves {', '.join(left)} outside Guideline 14: not named"
+        else:
+            named.append(r)
+    acc = named
+    if not acc:
+        return "unexplained_mismatch", first, [], explained_share(
+            ctx, nominal_sim, first.sim, moved(ctx, nominal_sim, first.sim, idx_aff))
     best = acc[0]
     for r in acc[1:]:
         if r.k < best.k and r.held_gain >= acc[0].held_gain - PARSIMONY and r.local is None and best.local is None:
@@ -156,6 +172,20 @@ def select(results, ctx, nominal_sim, affected):
 
 
 MOVED = 0.10
+
+
+def g14_left(ctx, nominal_sim, r, idx_aff) -> list:
+    """Energy/flow signals among the mismatched ones the candidate moves (MOVED) that still fail
+    Guideline 14's hourly acceptance on the held-out window after its fit."""
+    from .locate import ashrae_hourly
+
+    idx = [j for j in moved(ctx, nominal_sim, r.sim, idx_aff)
+           if abs(ctx.per_signal_mse(r.sim, ctx.held)[j] - ctx.per_signal_mse(nominal_sim, ctx.held)[j])
+           >= MOVED * max(ctx.per_signal_mse(nominal_sim, ctx.held)[j], 1e-12)]
+    if not idx:
+        return []
+    g = ashrae_hourly(ctx, r.sim, ctx.held)
+    return [ctx.measured[j] for j in idx if g.get(ctx.measured[j], {}).get("meets_guideline_14") is False]
 
 
 def moved(ctx, nominal_sim, sim, idx) -> list:
