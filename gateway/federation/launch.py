@@ -146,8 +146,9 @@ def summarize(district, out: Path) -> dict:
     """The district's energy balance from every member's ledger (meta.json), written to district.json.
 
     Heat moved between houses and grid cancels out: what the houses' substations booked as
-    extracted (fuel) and fed in (building) is what the grid booked as `to_houses`. The
-    district's water-side residual is the sum of the houses' and the grid's."""
+    extracted (fuel) and fed in (building) is what the grid booked as `to_houses`; their difference
+    (`exchange_gap`, round-off) is all that stands between the sum of the houses' and the grid's
+    water-side residuals and the district's."""
     houses = {}
     for h in district.houses:
         meta = json.loads((out / h.name / "meta.json").read_text())

@@ -31,6 +31,23 @@ def write(c, inst, key: str, expr: str, phase: str = "control") -> None:
     c.write_command(phase, link, f"{expr} * {float(scale)!r}" if scale is not None else expr)
 
 
+def emit_step(c, kind, inst, module: str, args: list[str] | None = None) -> str:
+    """A controller's step in the control phase: `module`.step(h, state, parameters, *inputs)
+    returns its OUTPUTS in order, each written to the input it links. `args` replaces the linked
+    inputs (a kind passing placeholders for unused parts); returns the state array's name, which
+    the kind's own signals read."""
+    from ..component import pack
+
+    x, p = c.state(inst, kind.initial_state(inst)), c.param(inst, pack(inst.params))
+    if args is None:
+        args = [read(c, inst, k) for k in kind.INPUTS]
+    outs = [c.var(v) for v in kind.OUTPUTS]
+    c.emit("control", f"{', '.join(outs)} = {c.module(module)}.step(h, {x}, {p}, {', '.join(args)})")
+    for key, v in zip(kind.OUTPUTS, outs):
+        write(c, inst, key, v)
+    return x
+
+
 def check_keys(c, inst, inputs: tuple, outputs: tuple) -> None:
     for table, allowed in (("inputs", inputs), ("outputs", outputs)):
         for key in inst.options[table]:

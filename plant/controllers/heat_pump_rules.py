@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, param
 from .rule_based import quantize
 
 STATES = ("valve_upper", "hp_on", "aux_on", "boiler_on", "solar_upper", "since_scan")
@@ -131,10 +131,9 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def emit(self, c, inst):
-        from . import check_keys, read, write
+        from . import check_keys, emit_step, read
 
         check_keys(c, inst, self.INPUTS, self.OUTPUTS)
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         linked = inst.options["outputs"]
         args = []
         for key in self.INPUTS:
@@ -143,11 +142,7 @@ class Kind(ComponentKind):
                 args.append("math.nan")  # an optional part nobody listens to: it never switches
             else:
                 args.append(read(c, inst, key))
-        outs = [c.var(v) for v in self.OUTPUTS]
-        mod = c.module(__name__)
-        c.emit("control", f"{', '.join(outs)} = {mod}.step(h, {x}, {p}, {', '.join(args)})")
-        for key, v in zip(self.OUTPUTS, outs):
-            write(c, inst, key, v)
+        x = emit_step(c, self, inst, __name__, args)
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('valve_upper', 'heat pump three-way valve the rules ask for (1 = upper ports)')} = {x}[{X_VALVE}]",

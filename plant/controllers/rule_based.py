@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, param
 
 STATES = ("chp_on", "boiler_on", "dhw_on", "since_scan")
 
@@ -95,13 +95,7 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def emit(self, c, inst):
-        from . import check_keys, read, write
+        from . import check_keys, emit_step
 
         check_keys(c, inst, self.INPUTS, self.OUTPUTS)
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        outs = [c.var(v) for v in self.OUTPUTS]
-        mod = c.module(__name__)
-        c.emit("control", f"{', '.join(outs)} = {mod}.step(h, {x}, {p}, "
-                          f"{', '.join(read(c, inst, k) for k in self.INPUTS)})")
-        for key, v in zip(self.OUTPUTS, outs):
-            write(c, inst, key, v)
+        x = emit_step(c, self, inst, __name__)

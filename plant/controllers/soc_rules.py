@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, param
 from .rule_based import quantize
 
 STATES = ("chp_on", "boiler_on", "since_scan", "heater_on")
@@ -114,7 +114,7 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def emit(self, c, inst):
-        from . import check_keys, read, write
+        from . import check_keys, emit_step, read
 
         check_keys(c, inst, self.INPUTS, self.OUTPUTS)
         linked = inst.options["outputs"]
@@ -127,13 +127,7 @@ class Kind(ComponentKind):
         for key in self.INPUTS:
             optional = (key == "T_heater" and not use_heater) or (key in ("P_pv", "P_household") and not surplus)
             args.append("0.0" if optional and key not in inst.options["inputs"] else read(c, inst, key))
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        outs = [c.var(v) for v in self.OUTPUTS]
-        mod = c.module(__name__)
-        c.emit("control", f"{', '.join(outs)} = {mod}.step(h, {x}, {p}, "
-                          f"{', '.join(args)}, {use_chp}, {use_boiler}, {use_heater})")
-        for key, v in zip(self.OUTPUTS, outs):
-            write(c, inst, key, v)
+        x = emit_step(c, self, inst, __name__, [*args, str(use_chp), str(use_boiler), str(use_heater)])
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('chp_on', 'CHP command of the rules (0/1)')} = {x}[{X_CHP}]",

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, param
 from .rule_based import quantize
 
 STATES = ("extracting", "feeding_in", "since_scan")
@@ -111,7 +111,7 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def emit(self, c, inst):
-        from . import check_keys, read, write
+        from . import check_keys, emit_step
 
         check_keys(c, inst, self.INPUTS, self.OUTPUTS)
         for key in self.OUTPUTS:
@@ -125,12 +125,7 @@ class Kind(ComponentKind):
         if q.T_feed_off > q.T_feed_on:
             c.problems.append(f"{inst.at('T_feed_off')} = {q.T_feed_off:g}: above T_feed_on = "
                               f"{q.T_feed_on:g}; feed-in must stop below where it starts")
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        outs = [c.var(v) for v in self.OUTPUTS]
-        c.emit("control", f"{', '.join(outs)} = {c.module(__name__)}.step(h, {x}, {p}, "
-                          f"{', '.join(read(c, inst, k) for k in self.INPUTS)})")
-        for key, v in zip(self.OUTPUTS, outs):
-            write(c, inst, key, v)
+        x = emit_step(c, self, inst, __name__)
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('extracting', 'extraction command of the rules (0/1)')} = {x}[{X_EXTRACT}]",

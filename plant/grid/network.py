@@ -145,7 +145,6 @@ class Grid:
         M_feed = np.zeros(nn)
         H_node_sup = np.zeros(nn)   # enthalpy the houses add (+) / take (-) at each supply node
         H_node_ret = np.zeros(nn)
-        to_houses = 0.0
         for h, d in draws.items():
             n = self.index[self.spec.attach[h]]
             Ts, Tr = published[h]
@@ -153,7 +152,7 @@ class Grid:
             M_feed[n] += d.M_fed_in
             H_node_sup[n] += d.H_fed_in_back - d.M_extracted * CP * Ts
             H_node_ret[n] += d.H_extracted_back - d.M_fed_in * CP * Tr
-            to_houses -= (d.H_fed_in_back - d.M_extracted * CP * Ts) + (d.H_extracted_back - d.M_fed_in * CP * Tr)
+        to_houses = -float(H_node_sup.sum() + H_node_ret.sum())  # what the houses took, net
         net = M_ext - M_feed                      # kg drawn from the supply line at each node
         F = self.beyond @ net                     # kg through each supply pipe, + from a to b
         M_plant = float(net.sum())
