@@ -9,9 +9,10 @@ fit (fit.py) -> judge and select (verdict.py) -> report (report.py). Method and 
 """
 from __future__ import annotations
 
+import math
 import time
 
-from . import fit, locate, parallel, recording_io, replay, search  # noqa: F401
+from . import fit, forward, locate, parallel, pipe_sensor, recording_io, replay, search  # noqa: F401
 from . import verdict as verdict_mod
 from .context import Context
 from .effects import catalogue
@@ -26,6 +27,12 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     warnings += replay.check(rec)
     rp = replay.Replayer(rec, house)
     ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
+    rp.t_train = ctx.t_split
+    radiator_cal = rp.calibrate_radiator(ctx.train)
+    if radiator_cal:
+        ctx.calibrated = tuple(replay.cut_mod.RADIATOR_OUTPUTS)
+        log(f"radiator alone: {radiator_cal['elements']} elements, " + ", ".join(
+            f"{k} {v:.4g}" for k, v in radiator_cal["values"].items()) + f", return RMS {radiator_cal['rms_K']:.3g} K")
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
     sim_file = nominal_rows[:, ctx.cols]
@@ -39,6 +46,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         log("nominal re-fit: " + ", ".join(f"{p['name']} {p['file_value']:.4g} -> {p['fitted_value']:.4g}"
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
+    pipe_tau = dict(rp.pipe_tau)
     ctx.nominal_rows = nominal_rows  # the replayed states, for candidates' plausible()
     ctx.nominal_sim = sim0
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
@@ -73,13 +81,14 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         results[i] = r
     for i, e in todo:
         if e.kind != "simulate":
-            results[i] = fit.fit_signal(e, ctx, sim0)
+            results[i] = fit.fit_signal(e, ctx, sim0, rp)
     for i, e in todo:
         r = results[i]
         log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
             f"held-out cost {r.held_cost:.4g}")
     verdict_mod.judge(results, ctx, J0t, J0h)
     verdict, best, twins, explained = verdict_mod.select(results, ctx, sim0, affected)
+    chosen = forward.extend(best, results, twins, ctx, rp) if verdict == "missing_physics" else []
     timing["fit"] = time.perf_counter() - t2
 
     t3 = time.perf_counter()
@@ -92,6 +101,17 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc,
                         terms, warnings)
     rep["nominal_refit"] = _report.nominal_refit(nref, ctx, sim0, best)
+    rep["effects"] = forward.public(chosen, ctx)
+    if len(chosen) > 1:
+        rep["finding"] += "; together with " + ", ".join(
+            f"{r.id} ({r.effect.summary(r.theta, ctx, r.rows)}{' on ' + r.signal if r.signal else ''}, held-out "
+            f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in chosen[1:])
+    rep["radiator_calibration"] = radiator_cal
+    rep["pipe_sensors"] = {flow: {"tau_s": tau if 0 < tau < math.inf else None,
+                                  "reading": "cools" if 0 < tau < math.inf else "holds" if tau else "as simulated",
+                                  "at_bound": pipe_sensor.at_bound(tau),
+                                  "T_plant_room_degC": rp._T_room}
+                           for flow, tau in pipe_tau.items()}
     _report.flag_bounds(rep, results)
     if out is not None:
         _report.write(rep, out, ctx, nominal_rows, best, plots=plots)

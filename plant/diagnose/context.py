@@ -7,6 +7,7 @@ import numpy as np
 
 from ..catalogue import CATALOGUE
 from ..errors import DataError
+from .pipe_sensor import scored_mask
 from .replay import comparable
 
 # normalisation of residuals per unit, so that one cost adds temperatures, flows and powers
@@ -21,44 +22,6 @@ MODES = {
     "chp_off_heating_on": "CHP off and heating pump on",
     "chp_on_boiler_on": "CHP and boiler on",
 }
-
-
-# Mode-aware comparison: a temperature sensor in a pipe reads its fluid only while the fluid
-# flows; on a stagnant pipe it reads the pipe cooling toward the room, which neither the twin's
-# generator (it holds its outlet at the last running value) nor the lab's physics define. Such a
-# sensor is scored only while its branch flows: at a sample and the one before it (the first
-# sample after a start still shows the flushed pipe). Flow evidence, first available: the
-# branch's measured flow (> FLOWING kg/s), else its recorded command.
-STAGNANT_PIPE = {
-    "chp.T_sup": ("chp.m_flow", "chp.on", 0.5), "chp.T_ret": ("chp.m_flow", "chp.on", 0.5),
-    "boiler.T_sup": ("boiler.m_flow", "boiler.U_set", 2.0), "boiler.T_ret": ("boiler.m_flow", "boiler.U_set", 2.0),
-    "mixer.T_sup": ("mixer.m_flow", "mixer.m_flow_set", 0.005), "mixer.T_ret": ("mixer.m_flow", "mixer.m_flow_set", 0.005),
-}
-FLOWING = 1e-3  # kg/s
-
-
-def flowing(rec, signal: str) -> np.ndarray | None:
-    """Samples where the pipe of a STAGNANT_PIPE sensor flows (None: not such a sensor)."""
-    if signal not in STAGNANT_PIPE:
-        return None
-    flow, cmd, on = STAGNANT_PIPE[signal]
-    if rec.has(flow):
-        f = np.nan_to_num(rec.data[flow]) > FLOWING
-    elif rec.has(cmd):
-        f = np.nan_to_num(rec.data[cmd]) > on
-    else:
-        return None
-    return f & np.concatenate([[False], f[:-1]])
-
-
-def stagnant_mask(rec, measured) -> np.ndarray:
-    """[n, len(measured)]: False where a sensor sits on a stagnant pipe (not scored)."""
-    out = np.ones((len(rec.time), len(measured)), bool)
-    for j, s in enumerate(measured):
-        f = flowing(rec, s)
-        if f is not None:
-            out[:, j] = f
-    return out
 
 
 @dataclass
@@ -76,6 +39,7 @@ class Context:
     nominal_rows: np.ndarray | None = None  # the nominal replay, all catalogue signals (set by diagnose)
     nominal_sim: np.ndarray | None = None   # its measured columns (the baseline every candidate is judged on)
     alone: dict | None = None               # {instances, signals} of a subsystem replayed alone (diagnose)
+    calibrated: tuple = ()                  # signals of a subsystem calibrated alone on them (diagnose)
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None):
@@ -98,8 +62,9 @@ class Context:
                             "record longer or give a smaller --train-days")
         meas = np.column_stack([rec.data[s] for s in measured])
         ok = np.isfinite(meas) & valid[:, None]
-        scored = stagnant_mask(rec, measured)
-        ok &= scored
+        # a pipe sensor's reading is modelled while its branch stands (pipe_sensor.py); the
+        # samples where its branch starts or stops are not scored
+        ok &= scored_mask(rec, measured)
         scale = np.array([SCALE.get(CATALOGUE.signal(s).unit, 1.0) for s in measured])
         noise = np.zeros(len(measured))
         for j in range(len(measured)):

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..components import mixing_station, radiator
+from ..components import mixing_station
 from ..schedule import n_steps
+from ..water import CP, RHO
 
 
 @dataclass(frozen=True)
@@ -156,36 +157,147 @@ def replay_circuit(rec, house: str, overrides: dict, n: int) -> dict:
     return dict(zip(CIRCUIT_OUTPUTS, out.T))
 
 
+# The radiator circuit alone is a chain of water elements (EN 442-2 as in Modelica Buildings'
+# RadiatorEN442_2, whose default is 5): its return lags its supply by a spread of residence times
+# that one mixed node cannot give. The element count, the rating and the water content are
+# calibrated on the recorded return (calibrate_radiator): an independent radiator shares neither
+# its discretisation nor its rating with the house file.
+RADIATOR_ELEMENTS = (1, 2, 3, 4, 5, 6, 8)
+RADIATOR_BOUNDS = {"radiator.Q_nominal": (0.6, 1.4), "radiator.V_water": (0.2, 2.0)}  # x the file value
+
+
 @njit(cache=True)
-def _radiator_run(times, m, T_sup, T_room, x, p, out):
-    """The radiators' water node over the samples, measured interfaces linear between samples;
-    out[i] = the return temperature at sample i."""
-    out[0] = x[0]
+def _element_coefficient(Q_N, T_sup_N, T_ret_N, T_room_N, n, N):
+    """k of one element's emission k (T - T_room)^n such that the N-element chain gives Q_N at
+    the nominal point (supply T_sup_N, return T_ret_N, room T_room_N) in steady state."""
+    m = Q_N / (CP * (T_sup_N - T_ret_N))
+    lo, hi = 0.0, 100.0 * Q_N / N
+    for _ in range(80):
+        k = 0.5 * (lo + hi)
+        T, Q = T_sup_N, 0.0
+        for _e in range(N):
+            a, b = T_room_N, T
+            for _i in range(60):  # the element's steady outlet: m cp (T_in - x) = k (x - T_room)^n
+                x = 0.5 * (a + b)
+                if m * CP * (T - x) > k * (x - T_room_N) ** n:
+                    a = x
+                else:
+                    b = x
+            Q += m * CP * (T - x)
+            T = x
+        if Q < Q_N:
+            lo = k
+        else:
+            hi = k
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _radiator_run(times, m, T_sup, T_room, x, k, n, C, out):
+    """The radiator elements over the samples (each explicit, exactly conservative), measured
+    interfaces linear between samples; out[i] = the last element's temperature (the return)."""
+    N = x.shape[0]
+    out[0] = x[N - 1]
     for i in range(1, times.shape[0]):
         t0, t1 = times[i - 1], times[i]
-        n = n_steps(t1 - t0)
-        h = (t1 - t0) / n
-        for k in range(n):
-            w = (k + 0.5) / n
-            radiator.step(h, x, p, m[i - 1] * (1.0 - w) + m[i] * w, T_sup[i - 1] * (1.0 - w) + T_sup[i] * w,
-                          T_room[i - 1] * (1.0 - w) + T_room[i] * w)
-        out[i] = x[0]
+        ns = n_steps(t1 - t0)
+        h = (t1 - t0) / ns
+        for s in range(ns):
+            w = (s + 0.5) / ns
+            mm = m[i - 1] * (1.0 - w) + m[i] * w
+            Tr = T_room[i - 1] * (1.0 - w) + T_room[i] * w
+            prev = T_sup[i - 1] * (1.0 - w) + T_sup[i] * w
+            for e in range(N):
+                T = x[e]
+                d = T - Tr
+                q = k * d ** n if d > 0.0 else 0.0
+                x[e] = T + h * (mm * CP * (prev - T) - q) / C
+                prev = T
+        out[i] = x[N - 1]
 
 
-def replay_radiator(rec, house: str, overrides: dict, n: int) -> dict:
+def replay_radiator(rec, house: str, overrides: dict, n: int, elements: int = 5) -> dict:
     """The radiator circuit of `house` (with the `radiator.*` overrides) replayed alone over the
-    first n samples from the measured circuit flow, supply and room -> {mixer.T_ret: values}.
-    The water node starts at the first recorded return."""
-    from ..component import pack
+    first n samples from the measured circuit flow, supply and room, as `elements` elements in
+    series -> {mixer.T_ret: values}. Every element starts at the first recorded return."""
     from ..declaration import load
 
-    spec = load(house, {k: v for k, v in overrides.items() if k.startswith("radiator.")} or None)
-    p = pack(spec.instances["radiator"].params)
-    x = radiator.initial_state(spec.instances["radiator"].params)
+    prm = load(house, {k: v for k, v in overrides.items() if k.startswith("radiator.")} or None) \
+        .instances["radiator"].params
+    k = _element_coefficient(prm.Q_nominal, prm.T_sup_nominal, prm.T_ret_nominal, prm.T_room_nominal,
+                             prm.exponent, elements)
     T0 = _filled(rec.data["mixer.T_ret"][:n])[0]
-    if np.isfinite(T0):
-        x[0] = T0
+    x = np.full(elements, T0 if np.isfinite(T0) else prm.T_init)
     cols = [_filled(rec.data[s][:n]) for s in RADIATOR_INPUTS]
     out = np.empty(n)
-    _radiator_run(np.ascontiguousarray(rec.time[:n], dtype=np.float64), *cols, x, p, out)
+    _radiator_run(np.ascontiguousarray(rec.time[:n], dtype=np.float64), *cols, x, k, prm.exponent,
+                  CP * RHO * prm.V_water / elements, out)
     return {"mixer.T_ret": out}
+
+
+def radiator_file_values(house: str) -> dict:
+    from ..declaration import load
+
+    prm = load(house).instances["radiator"].params
+    return {key: float(getattr(prm, key.split(".", 1)[1])) for key in RADIATOR_BOUNDS}
+
+
+def _radiator_cost(rec, house: str, mask: np.ndarray, elements: int, transform=None):
+    """-> (J(values) = MSE of the recorded return on `mask`, the override keys): values in the
+    order of RADIATOR_BOUNDS, the simulated return passed through `transform` when given."""
+    keys = list(RADIATOR_BOUNDS)
+    meas = rec.data["mixer.T_ret"]
+    n = int(np.flatnonzero(mask).max()) + 1
+    m = mask[:n] & np.isfinite(meas[:n])
+
+    def J(values):
+        y = replay_radiator(rec, house, dict(zip(keys, values)), n, elements)["mixer.T_ret"]
+        if transform is not None:
+            y = transform(y)
+        return float(np.mean((meas[:n][m] - y[m]) ** 2))
+    return J, keys
+
+
+def fit_radiator(rec, house: str, mask: np.ndarray, elements: int, start: dict, transform=None) -> tuple:
+    """Rating and water content of the radiator alone (elements fixed) that fit the recorded return
+    on `mask` (Nelder-Mead within RADIATOR_BOUNDS x the file value), the simulated return passed
+    through `transform` when given (a sensor candidate fitted jointly). -> (values, MSE)."""
+    from scipy.optimize import minimize
+
+    file = radiator_file_values(house)
+    J, keys = _radiator_cost(rec, house, mask, elements, transform)
+    lo = np.array([RADIATOR_BOUNDS[q][0] for q in keys])
+    hi = np.array([RADIATOR_BOUNDS[q][1] for q in keys])
+
+    def Ju(u):  # relative to the file values; outside the bounds: clipped, plus a penalty
+        rel = np.clip(u, lo, hi)
+        return J([file[q] * r for q, r in zip(keys, rel)]) + float(np.sum((u - rel) ** 2))
+
+    u0 = np.array([start[q] / file[q] for q in keys])
+    res = minimize(Ju, u0, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-6, "maxfev": 120})
+    rel = np.clip(res.x, lo, hi)
+    return {q: file[q] * r for q, r in zip(keys, rel)}, float(res.fun)
+
+
+def calibrate_radiator(rec, house: str, mask: np.ndarray) -> dict:
+    """The radiator alone calibrated on the recorded return over `mask` (the training window's
+    flowing samples): each element count of RADIATOR_ELEMENTS with its rating and water content,
+    the best kept. -> {elements, values {override: value}, rms_K, per_elements {N: rms}, at_bound}."""
+    file = radiator_file_values(house)
+    trials = {}
+    for N in RADIATOR_ELEMENTS:
+        trials[N] = fit_radiator(rec, house, mask, N, file)
+    N = min(trials, key=lambda q: trials[q][1])
+    values = trials[N][0]
+    at = [q for q, v in values.items()
+          if min(abs(v / file[q] - b) for b in RADIATOR_BOUNDS[q]) < 2e-3]
+    from .fit import identifiability
+
+    J, keys = _radiator_cost(rec, house, mask, N)
+    t = rec.time[mask]
+    ident = identifiability(J, keys, [file[q] * RADIATOR_BOUNDS[q][0] for q in keys],
+                            [file[q] * RADIATOR_BOUNDS[q][1] for q in keys], [values[q] for q in keys],
+                            max(2.0, (t[-1] - t[0]) / 1800.0))
+    return {"elements": N, "values": values, "rms_K": float(np.sqrt(trials[N][1])),
+            "per_elements": {q: float(np.sqrt(v[1])) for q, v in trials.items()}, "at_bound": at,
+            "file_values": file, "identifiability": ident}

@@ -114,7 +114,7 @@ def _descent(F, params, theta, idx, maxiter=6, n_grid=3):
 def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
     """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
     window; sets replayer.base to them (every later replay starts from them). -> report entry."""
-    params = nominal_params(house, refit, replayer.instances())
+    params = nominal_params(house, refit, replayer.instances() - replayer.calibrated)
     refit = [q for q in refit if q.key in {p.name for p in params}]
     if not params:
         return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan}
@@ -131,15 +131,76 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
     theta0 = [p.nominal for p in params]
     J_file = F(theta0)
     theta, J, _ = _descent(F, params, theta0, range(len(params)))
-    replayer.base = {p.name: float(v) for p, v in zip(params, theta)}
+    replayer.base = {**replayer.base, **{p.name: float(v) for p, v in zip(params, theta)}}
     rows = []
     for p, q, v in zip(params, refit, theta):
         rows.append({"name": p.name, "file_value": p.nominal, "fitted_value": float(v),
                      "change_pct": 100.0 * (v / p.nominal - 1.0) if p.nominal else math.nan,
                      "bounds": [p.lo, p.hi], "unit": p.unit,
                      "at_bound": at_bound(p, v) and not (q.bounds is not None and v == p.nominal), "why": q.why})
+    ident = identifiability(F, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
+                            theta, ctx.n_eff(ctx.train))
     return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
-            "evaluations": len(cache), "params": params}
+            "evaluations": len(cache), "params": params, "identifiability": ident}
+
+
+# identifiability: a calibrated parameter is pinned down when its approximate 1-sigma interval
+# (from the cost's curvature) spans less than this share of its physical range, and no pair of
+# them trades off against each other (|correlation| above MAX_CORR)
+MAX_SPAN = 0.5
+MAX_CORR = 0.95
+
+
+def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05) -> dict:
+    """Local identifiability of a calibration at its optimum theta: the Hessian of the cost F in
+    range-normalised coordinates (u = (v - lo) / (hi - lo)) by central differences (steps h,
+    kept inside the range), the approximate covariance 2 J / n_eff * H^-1 as for every fitted
+    parameter here, each parameter's 1-sigma span as a share of its range and the correlations.
+    -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
+    identifiable: bool, why}."""
+    k = len(theta)
+    u0 = np.array([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)])
+    steps = np.array([h if 0.0 <= u - h and u + h <= 1.0 else max(min(u, 1.0 - u), 1e-3) for u in u0])
+
+    def G(u):
+        return F([a + x * (b - a) for x, a, b in zip(u, lo, hi)])
+
+    J = G(u0)
+    H = np.zeros((k, k))
+    for i in range(k):
+        e = np.zeros(k)
+        e[i] = steps[i]
+        H[i, i] = (G(u0 + e) - 2.0 * J + G(u0 - e)) / steps[i] ** 2
+        for j in range(i):
+            f = np.zeros(k)
+            f[j] = steps[j]
+            H[i, j] = H[j, i] = (G(u0 + e + f) - G(u0 + e - f) - G(u0 - e + f) + G(u0 - e - f)) / (4 * steps[i] * steps[j])
+    out = {"parameters": [], "correlations": {}, "identifiable": True, "why": ""}
+    try:
+        cov = np.linalg.inv(H) * 2.0 * J / max(n_eff, 1.0)
+        ok = np.all(np.linalg.eigvalsh(H) > 0)
+    except np.linalg.LinAlgError:
+        cov, ok = np.full((k, k), np.inf), False
+    why = []
+    for i, name in enumerate(names):
+        span = float(np.sqrt(cov[i, i])) if ok and cov[i, i] > 0 else math.inf
+        ident = span <= MAX_SPAN
+        out["parameters"].append({"name": name, "sigma_share_of_range": span if math.isfinite(span) else None,
+                                  "identifiable": ident})
+        if not ident:
+            why.append(f"{name}: the cost hardly changes across its range (1-sigma span "
+                       f"{'unbounded' if not math.isfinite(span) else f'{span:.2f} of it'})")
+    for i in range(k):
+        for j in range(i):
+            if ok and cov[i, i] > 0 and cov[j, j] > 0:
+                r = float(cov[i, j] / math.sqrt(cov[i, i] * cov[j, j]))
+                out["correlations"][f"{names[j]}|{names[i]}"] = r
+                if abs(r) > MAX_CORR:
+                    why.append(f"{names[j]} and {names[i]} trade off (correlation {r:+.2f}): only a "
+                               "combination of them is pinned down")
+    out["identifiable"] = not why
+    out["why"] = "; ".join(why)
+    return out
 
 
 @dataclass
@@ -335,17 +396,21 @@ def common_mode(ctx, nominal_sim, j):
 LOCAL_GAIN = 0.35
 
 
-def fit_signal(effect, ctx, nominal_sim) -> Result:
+def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
     """Fit a post-processing candidate to each eligible signal; keep the one whose own residual
     it reduces by the largest share on training (a sensor effect explains its sensor's residual
     nearly whole; a structural difference it imitates, only in part). On a storage sensor the effect acts on the twin's
-    value plus the neighbours' common residual (common_mode) and is judged there (Result.local)."""
+    value plus the neighbours' common residual (common_mode) and is judged there (Result.local);
+    on the return of the radiator replayed alone (replayer given) it is fitted jointly with the
+    radiator's rating and water content and judged on that return alone (Result.local)."""
     from ..catalogue import CATALOGUE
+    from .cut import RADIATOR_OUTPUTS
 
     p = effect.params[0]
     t = ctx.rec.time
     best = None
     nfev = 0
+    alone = set(RADIATOR_OUTPUTS) if replayer is not None and replayer.radiator else set()
     for j, s in enumerate(ctx.measured):
         if CATALOGUE.signal(s).unit not in effect.signal_units:
             continue
@@ -355,29 +420,39 @@ def fit_signal(effect, ctx, nominal_sim) -> Result:
         if m.sum() < 10:
             continue
 
-        def f(v, y0=y0, m=m, j=j):
-            y = effect.apply(t, y0, [v])
-            return float(np.mean((ctx.meas[m, j] - y[m]) ** 2))
+        def fit_on(y0, m=m, j=j):
+            def f(v):
+                return float(np.mean((ctx.meas[m, j] - effect.apply(t, y0, [v])[m]) ** 2))
+            if effect.id == "sensor_offset":
+                v = float(np.clip(np.mean(ctx.meas[m, j] - y0[m]), p.lo, p.hi))
+                return v, f(v), 1, f
+            return _scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
 
-        if effect.id == "sensor_offset":
-            v = float(np.clip(np.mean(ctx.meas[m, j] - y0[m]), p.lo, p.hi))
-            J = f(v)
-            nfev += 1
-        else:
-            v, J, k = _scalar_search(f, p, n_grid=5, maxiter=8)
-            nfev += k
-        J0 = float(np.mean((ctx.meas[m, j] - y0[m]) ** 2))
+        y_before = y0
+        v, J, k, f = fit_on(y0)
+        nfev += k
+        if s in alone:
+            # the radiator replayed alone: its rating, water content and element count are
+            # re-fitted with the candidate applied (a larger radiator delays its return too:
+            # calibrated without the candidate it absorbs part of a sensor's delay), two alternations
+            for _ in range(2):
+                vals, N = replayer.refit_radiator(lambda y, v=v: effect.apply(t[:len(y)], y, [v]), ctx.train)
+                y0 = replayer.radiator_return(vals, N)
+                v, J, k, f = fit_on(y0)
+                nfev += k
+        J0 = float(np.mean((ctx.meas[m, j] - y_before[m]) ** 2))
         red = (J0 - J) / max(J0, 1e-12)  # the share of the signal's own residual the effect removes
-        # a storage sensor's share is of its residual relative to its neighbours, another
-        # signal's of its whole residual (a structural bias included): a storage sensor whose
-        # share would pass LOCAL_GAIN goes first
-        key = (c is not None and red >= LOCAL_GAIN, red)
+        # a storage sensor's share is of its residual relative to its neighbours, the return of a
+        # subsystem replayed alone of its residual there, another signal's of its whole residual
+        # (a structural bias included): a local one whose share would pass LOCAL_GAIN goes first
+        local = c is not None or s in alone
+        key = (local and red >= LOCAL_GAIN, red)
         if best is None or key > best[0]:
-            best = (key, j, v, f, y0, c is not None)
+            best = (key, j, v, f, y0, local, y_before)
     if best is None:
         return Result(effect.id, effect.component, effect.kind, False, "no eligible measured signal",
                       effect=effect)
-    _, j, v, f, y0, local = best
+    _, j, v, f, y0, local, y_before = best
     sim = nominal_sim.copy()
     sim[:, j] = effect.apply(t, y0, [v])
     m = ctx.train & ctx.ok[:, j]
@@ -388,10 +463,15 @@ def fit_signal(effect, ctx, nominal_sim) -> Result:
                evaluations=nfev, sim=sim, effect=effect)
     if local:
         h = ctx.held & ctx.ok[:, j]
-        e0, e1 = ctx.meas[h, j] - y0[h], ctx.meas[h, j] - sim[h, j]
+        e0, e1 = ctx.meas[h, j] - y_before[h], ctx.meas[h, j] - sim[h, j]
         r.local = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
                    "heldout_rms_after": float(np.sqrt(np.mean(e1 ** 2))),
                    "gain": 1.0 - float(np.mean(e1 ** 2)) / max(float(np.mean(e0 ** 2)), 1e-12),
                    "limit": 0.3 * ctx.scale[j] + 3.0 * ctx.noise[j],
                    "neighbours": [ctx.measured[k] for k in neighbours(ctx, j)]}
+        if ctx.measured[j] in alone:
+            # calibrated on this very signal, the subsystem alone has no structural allowance to
+            # keep: its residual is a mismatch above the sensor's noise (3 sigma)
+            r.local["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
+            r.local["limit"] = 3.0 * ctx.noise[j]
     return r

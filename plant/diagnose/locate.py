@@ -143,14 +143,17 @@ def mismatched_signals(ctx, sim, mask, tol: float = 0.3, tol_rms: float = 1.0) -
         1 K. A lagging sensor errs only while its temperature moves: large but short-lived
         errors the median ignores. Temperatures are states, so command-timing spikes stay small
         (a noise-only replay of the truth: RMS <= 0.8 K); flows and powers switch with the
-        commands, where the RMS of a correct model is dominated by edge timing."""
+        commands, where the RMS of a correct model is dominated by edge timing.
+    A signal of a subsystem calibrated alone on that very signal (ctx.calibrated: the radiator's
+    return) keeps no allowance for replay structure: a mismatch is above 3 noise sigma."""
     m = metrics(ctx, sim, mask)
     out = []
     for j, s in enumerate(ctx.measured):
         if s not in m:
             continue
-        lim = tol * ctx.scale[j] + 3.0 * ctx.noise[j]
-        lim_rms = tol_rms * ctx.scale[j] + 3.0 * ctx.noise[j]
+        own = 0.0 if s in ctx.calibrated else 1.0
+        lim = own * tol * ctx.scale[j] + 3.0 * ctx.noise[j]
+        lim_rms = own * tol_rms * ctx.scale[j] + 3.0 * ctx.noise[j]
         transient = CATALOGUE.signal(s).unit == "degC" and m[s]["rmse"] > lim_rms
         if abs(m[s]["bias"]) > lim or m[s]["robust"] > lim or transient:
             out.append(s)

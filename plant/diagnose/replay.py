@@ -21,6 +21,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
+from . import pipe_sensor
 
 COMMANDS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set")
 # a command the recording may replace by a measured signal (with a warning)
@@ -120,7 +121,16 @@ class Replayer:
         # overrides take precedence over them
         self.base: dict = {}
         self.sensors = rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}
+        # the end of the training window (diagnose sets it): the pipe sensors' cooling time
+        # constants are fitted up to it (pipe_sensor.py); pipe_tau holds the last run's
+        self.t_train: float | None = None
+        self.pipe_tau: dict = {}
+        # the radiator alone's element count and the instances calibrated on their own subsystem
+        # (calibrate_radiator): the nominal re-fit leaves those alone
+        self.radiator_elements = 5
+        self.calibrated: set = set()
         self._layout()
+        self._T_room = self._plant_room()
 
     def _layout(self) -> None:
         from ..compiler import catalogue_of
@@ -140,6 +150,13 @@ class Replayer:
         if self.radiator:
             simulated += list(cut_mod.RADIATOR_OUTPUTS)
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
+
+    def _plant_room(self) -> float:
+        from ..declaration import load
+
+        inst = load(self.plant_name).instances.get("storage")
+        return float(inst.params.T_env) if inst is not None and hasattr(inst.params, "T_env") \
+            else pipe_sensor.T_PLANT_ROOM_DEFAULT
 
     def instances(self) -> set:
         """Instances a run's overrides may address: the replayed plant's, and the mixing
@@ -205,10 +222,52 @@ class Replayer:
             for sig, v in cut_mod.replay_circuit(self.rec, self.house_name, sub_ov, n).items():
                 out[:, CATALOGUE.index(sig)] = v
         if self.radiator:
-            for sig, v in cut_mod.replay_radiator(self.rec, self.house_name, sub_ov, n).items():
+            for sig, v in cut_mod.replay_radiator(self.rec, self.house_name, sub_ov, n,
+                                                            self.radiator_elements).items():
                 out[:, CATALOGUE.index(sig)] = v
+        cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
+        t_fit = self.t_train if until is None else min(self.t_train or until, until)
+        self.pipe_tau = pipe_sensor.apply(self.rec, out, cols, n, self._T_room,
+                                          t_fit if self.t_train is not None else None)
         self._checked = True
         return out
+
+    def calibrate_radiator(self, train: np.ndarray) -> dict | None:
+        """Calibrate the radiator replayed alone on the recorded return over the training samples
+        at which the circuit flows (cut.calibrate_radiator); later runs use it. -> report entry."""
+        if not self.radiator:
+            return None
+        from .pipe_sensor import FLOWING
+
+        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > FLOWING
+        cal = cut_mod.calibrate_radiator(self.rec, self.house_name, train & flow & np.roll(flow, 1))
+        self.radiator_elements = cal["elements"]
+        self.base.update(cal["values"])
+        self.calibrated.add("radiator")
+        return cal
+
+    def radiator_return(self, values: dict, elements: int | None = None) -> np.ndarray:
+        """The compared mixer.T_ret of the radiator alone with `values` (radiator overrides) and
+        `elements` (default: the calibrated count) over the whole recording, read through the
+        pipe-sensor model as the last run fitted it."""
+        ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith("radiator.")}
+        y = cut_mod.replay_radiator(self.rec, self.house_name, ov, len(self.t),
+                                    elements or self.radiator_elements)["mixer.T_ret"]
+        tau = self.pipe_tau.get("mixer.m_flow", pipe_sensor.AS_SIMULATED)
+        flowing = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
+        return pipe_sensor.cooled(self.t, y, flowing, tau, self._T_room)
+
+    def refit_radiator(self, transform, mask: np.ndarray) -> tuple:
+        """The radiator alone re-fitted with a sensor candidate's `transform` on its return
+        (jointly, as the nominal re-fit is with a plant candidate): rating and water content, and
+        the element count next to the calibrated one. -> (values, elements)."""
+        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
+        start = {k: v for k, v in self.base.items() if k in cut_mod.RADIATOR_BOUNDS}
+        near = [N for N in cut_mod.RADIATOR_ELEMENTS if abs(N - self.radiator_elements) <= 1]
+        fits = {N: cut_mod.fit_radiator(self.rec, self.house_name, mask & flow & np.roll(flow, 1), N, start,
+                                        transform) for N in near}
+        N = min(fits, key=lambda q: fits[q][1])
+        return fits[N][0], N
 
     def boundary_check(self, rows: np.ndarray) -> list[str]:
         warnings = []

@@ -158,7 +158,14 @@ def select(results, ctx, nominal_sim, affected):
         # a plant candidate acts on the subsystems it moves; a storage-sensor candidate was judged
         # relative to its neighbours; a sensor candidate on any other signal answers for all of it
         idx = moved(ctx, nominal_sim, best.sim, idx)
-    explained = explained_share(ctx, nominal_sim, best.sim, idx)
+    if best.local is not None and best.kind == "signal":
+        # a sensor candidate judged on its own residual (relative to its neighbours, or on a
+        # subsystem replayed alone) explains the share of that residual above the noise
+        j = ctx.measured.index(best.signal)
+        b, a = best.local["heldout_rms_before"] ** 2, best.local["heldout_rms_after"] ** 2
+        explained = float((b - a) / max(b - ctx.noise[j] ** 2, 1e-12))
+    else:
+        explained = explained_share(ctx, nominal_sim, best.sim, idx)
     twins = []
     for r in acc:
         if r is best:

@@ -1,12 +1,14 @@
 """The diagnosis replays on a cut: measured boundaries instead of the twin's own load profiles;
-stagnant-pipe sensors scored only while their branch flows; Guideline 14 figures; verdicts when
-no candidate explains a mismatch."""
+stagnant-pipe sensors modelled; the radiator alone as calibrated elements; Guideline 14 figures;
+verdicts when no candidate explains a mismatch."""
 import math
 
 import numpy as np
 
 from plant.diagnose import cut, locate, replay, synth
-from plant.diagnose.context import Context, stagnant_mask
+from plant.diagnose import fit, pipe_sensor
+from plant.diagnose.context import Context
+from plant.diagnose.pipe_sensor import scored_mask
 
 CIRCUIT = synth.LAB_SIGNALS + ["dhw.m_flow_hot"]
 
@@ -57,16 +59,42 @@ def test_a_leaking_valve_shows_in_the_mixing_station_replayed_alone():
     assert np.mean(leaky["mixer.T_sup"][closed] - tight["mixer.T_sup"][closed]) > 0.15 * np.mean(T_p - T_r)
 
 
-def test_stagnant_pipe_sensors_are_scored_only_while_their_branch_flows():
-    rec = synth.make("none", days=0.3, noise=False)
+def test_pipe_sensors_are_scored_except_where_their_branch_switches():
+    rec = synth.make("none", days=0.6, noise=False)
     measured = ["chp.T_sup", "boiler.T_sup", "storage.T_sensor_5"]
-    mask = stagnant_mask(rec, measured)
-    chp_on = rec.data["chp.on"] > 0.5
-    assert not mask[~chp_on, 0].any()                          # CHP off: its outlet is not scored
-    assert mask[1:, 0][chp_on[1:] & chp_on[:-1]].all()
-    boiler_flow = rec.data["boiler.m_flow"] > 1e-3              # a measured flow beats the command
-    assert not mask[~boiler_flow, 1].any()
+    mask = scored_mask(rec, measured)
+    # a measured flow beats the command: the recording has the boiler's flow, not the CHP's
+    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "boiler.T_sup"), rec.data["boiler.m_flow"] > 1e-3)
+    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "chp.T_sup"), rec.data["chp.on"] > 0.5)
+    for j, s in enumerate(measured[:2]):
+        f = pipe_sensor.recorded_flowing(rec, s)
+        switches = np.flatnonzero(f[1:] != f[:-1]) + 1
+        assert switches.size >= 2 and not mask[switches, j].any()  # a start or stop: its instant is unknown
+        assert mask[:, j].sum() == len(mask) - switches.size
     assert mask[:, 2].all()                                    # a storage sensor is always scored
+
+
+def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
+    # the recorded reading of a stagnant pipe follows Newton cooling with tau = 1500 s; the
+    # replay's reading is fitted on the training samples to that tau
+    t = np.arange(0.0, 6 * 3600.0, 60.0)
+    flowing = (t % 7200.0) < 2400.0
+    fluid = np.full(t.size, 60.0)
+    truth = pipe_sensor.cooled(t, fluid, flowing, 1500.0, 18.0)
+    stop = np.flatnonzero(flowing[:-1] & ~flowing[1:])[0] + 1
+    assert truth[stop - 1] == 60.0 and abs(truth[stop + 24] - (18.0 + 42.0 * np.exp(-1500.0 / 1500.0))) < 1e-9
+
+    class Rec:
+        time = t
+        data = {"chp.T_sup": truth, "chp.m_flow": np.where(flowing, 0.1, 0.0)}
+
+        def has(self, s):
+            return s in self.data
+
+    out = np.column_stack([fluid, Rec.data["chp.m_flow"]])
+    taus = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 18.0, t[-1] / 2)
+    assert abs(taus["chp.m_flow"] / 1500.0 - 1.0) < 0.01
+    assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
 
 
 def test_guideline_14_hourly_figures_follow_their_formula():
@@ -85,3 +113,47 @@ def test_guideline_14_hourly_figures_follow_their_formula():
     assert g["hours"] == n
     assert math.isclose(g["cvrmse_pct"], 100 * math.sqrt((e ** 2).sum() / (n - 1)) / m.mean(), rel_tol=1e-9)
     assert math.isclose(g["nmbe_pct"], 100 * e.sum() / ((n - 1) * m.mean()), rel_tol=1e-9)
+
+
+def test_a_radiator_chain_of_any_length_gives_its_rating_at_the_nominal_point():
+    # EN 442 nominal point 60/45/21 degC: in steady state at the nominal flow the chain returns
+    # 45 degC and emits Q_N, whatever its element count (the element coefficient is solved for it)
+    Q_N, cp = 8778.0, 4180.0
+    m = Q_N / (cp * 15.0)
+    t = np.arange(0.0, 6 * 3600.0 + 1, 60.0)
+    for N in (1, 3, 5):
+        k = cut._element_coefficient(Q_N, 60.0, 45.0, 21.0, 1.3, N)
+        x = np.full(N, 30.0)
+        out = np.empty(t.size)
+        cut._radiator_run(t, np.full(t.size, m), np.full(t.size, 60.0), np.full(t.size, 21.0), x, k, 1.3,
+                          cp * 1000.0 * 0.12 / N, out)
+        assert abs(out[-1] - 45.0) < 0.01, (N, out[-1])
+        assert abs(m * cp * (60.0 - out[-1]) / Q_N - 1.0) < 1e-3
+        emitted = sum(k * (T - 21.0) ** 1.3 for T in x)   # the elements' emission balances the flow's heat
+        assert abs(emitted / Q_N - 1.0) < 1e-3
+
+
+def test_the_radiator_alone_calibration_finds_elements_rating_and_water():
+    rec = synth.make("none", days=1.5, signals=CIRCUIT, noise=False)
+    truth = {"radiator.Q_nominal": 7000.0, "radiator.V_water": 0.12}
+    rec.data["mixer.T_ret"] = cut.replay_radiator(rec, "house1", truth, len(rec.time), 3)["mixer.T_ret"] \
+        + np.random.default_rng(1).normal(0.0, 0.05, len(rec.time))
+    flow = rec.data["mixer.m_flow"] > 1e-3
+    cal = cut.calibrate_radiator(rec, "house1", flow & (rec.time < rec.time[0] + 86400.0))
+    assert cal["elements"] == 3 and cal["rms_K"] < 0.06
+    assert abs(cal["values"]["radiator.Q_nominal"] / 7000.0 - 1.0) < 0.02
+    assert abs(cal["values"]["radiator.V_water"] / 0.12 - 1.0) < 0.05
+    assert cal["identifiability"]["identifiable"] and not cal["at_bound"]
+
+
+def test_identifiability_names_a_flat_parameter_and_a_trade_off():
+    # J = (a + b - 1)^2 + 0.01: a and b trade off; J = (a - 0.3)^2 + 1e-9 c + 0.01: c is flat
+    trade = fit.identifiability(lambda v: (v[0] + v[1] - 1.0) ** 2 + 0.01 * (v[0] - 0.5) ** 2 + 0.01,
+                                ["a", "b"], [0, 0], [1, 1], [0.5, 0.5], 100.0)
+    assert not trade["identifiable"] and "trade off" in trade["why"] and trade["correlations"]["a|b"] < -0.95
+    flat = fit.identifiability(lambda v: (v[0] - 0.3) ** 2 + 1e-9 * v[1] ** 2 + 0.01,
+                               ["a", "c"], [0, 0], [1, 1], [0.3, 0.5], 100.0)
+    assert [p["identifiable"] for p in flat["parameters"]] == [True, False] and "c:" in flat["why"]
+    sharp = fit.identifiability(lambda v: (v[0] - 0.3) ** 2 + (v[1] - 0.6) ** 2 + 0.01,
+                                ["a", "b"], [0, 0], [1, 1], [0.3, 0.6], 100.0)
+    assert sharp["identifiable"] and sharp["why"] == ""

@@ -1,0 +1,100 @@
+"""Forward selection: more than one effect when the data call for it.
+
+After the best candidate is named, every other candidate is tried again on top of the model that
+already holds the chosen effects, and judged by the same rules (verdict.judge) against that model
+instead of the nominal twin: held-out gain >= MIN_GAIN (or, for a sensor candidate judged on its
+own residual, LOCAL_GAIN of it), a better BIC and no parameter on a bound. The best accepted one
+joins, and the search repeats (at most MAX_EFFECTS effects). How a candidate goes on top:
+  * a sensor candidate is re-fitted on the current model's reading of each signal (fit.fit_signal);
+  * a plant candidate with a sensor effect chosen: its own fitted replay, with the chosen sensor's
+    column taken from the current model (the sensor effect explains that reading, the plant
+    candidate the rest);
+  * a plant candidate on top of a plant effect: one replay with both sets of overrides at their
+    fitted values (no re-fit: the first effect's fit already absorbed what it could).
+A candidate on the same signal or component as a chosen one, or indistinguishable from it, is not
+tried: it would explain the same residual twice.
+"""
+from __future__ import annotations
+
+import copy
+
+from . import fit
+from . import verdict as verdict_mod
+
+MAX_EFFECTS = 3
+
+
+def _based_on(ctx, sim):
+    """The context with `sim` as the model a candidate is judged against."""
+    c = copy.copy(ctx)
+    c.nominal_sim = sim
+    return c
+
+
+def _on_top(r, current, chosen, ctx, replayer):
+    """Candidate r evaluated on top of the current model (sim `current`); None if it cannot be."""
+    base = _based_on(ctx, current)
+    if r.kind == "signal":
+        return fit.fit_signal(r.effect, base, current, replayer)
+    sensors = [c for c in chosen if c.kind == "signal"]
+    plants = [c for c in chosen if c.kind == "simulate"]
+    if plants:
+        ov = {}
+        for c in plants:
+            ov.update(c.nominal)
+            ov.update(c.effect.overrides(c.theta))
+        own = r.effect.overrides(r.theta)
+        if set(own) & {k for c in plants for k in c.effect.overrides(c.theta)}:
+            return None
+        ov.update(own)
+        rows = replayer.run(ov)
+        sim = rows[:, ctx.cols]
+    else:
+        rows, sim = r.rows, r.sim.copy()
+    for c in sensors:
+        j = ctx.measured.index(c.signal)
+        sim[:, j] = current[:, j]
+    out = fit.Result(r.id, r.component, r.kind, True, theta=list(r.theta), stderr=list(r.stderr),
+                     train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
+                     evaluations=1, sim=sim, rows=rows, effect=r.effect, nominal=dict(r.nominal))
+    out.k = r.k
+    return out
+
+
+def extend(best, results, twins, ctx, replayer) -> list:
+    """[best, further effects ...] (fit.Result each, with held_gain relative to the model before it)."""
+    chosen = [best]
+    current = best.sim
+    tried = {r.id for r in chosen} | set(twins)
+    while len(chosen) < MAX_EFFECTS:
+        taken = {c.signal or c.component for c in chosen}
+        trial = []
+        for r in results:
+            if r.id in tried or not r.plausible or r.sim is None or (r.signal or r.component) in taken:
+                continue
+            r2 = _on_top(r, current, chosen, ctx, replayer)
+            if r2 is None or (r2.signal or r2.component) in taken:
+                continue
+            trial.append(r2)
+        base = _based_on(ctx, current)
+        verdict_mod.judge(trial, base, ctx.cost(current, ctx.train), ctx.cost(current, ctx.held))
+        acc = sorted((r for r in trial if r.accepted), key=lambda r: -r.held_gain)
+        if not acc:
+            break
+        nxt = acc[0]
+        chosen.append(nxt)
+        tried.add(nxt.id)
+        current = nxt.sim
+    return chosen
+
+
+def public(chosen, ctx) -> list[dict]:
+    """report.json `effects`: each chosen effect, what it adds over the model before it."""
+    out = []
+    for i, r in enumerate(chosen):
+        p = r.public()
+        out.append({"effect": r.id, "component": r.signal or r.component, "parameters": p["parameters"],
+                    "summary": r.effect.summary(r.theta, ctx, r.rows),
+                    "heldout_gain_over_previous": r.held_gain, "reason": r.reason,
+                    "order": i + 1})
+    return out
