@@ -43,6 +43,8 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         nominal_rows = rp.run()
         nref["train_cost_file"] = ctx.cost(sim_file, ctx.train)
         nref["heldout_cost_file"] = ctx.cost(sim_file, ctx.held)
+        if nref.get("storage_scheme"):
+            log(f"storage scheme: {nref['storage_scheme']['chosen']}")
         log("nominal re-fit: " + ", ".join(f"{p['name']} {p['file_value']:.4g} -> {p['fitted_value']:.4g}"
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]

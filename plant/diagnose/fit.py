@@ -58,6 +58,21 @@ NOMINAL_REFIT = (
                  "storage model resolves its thermocline (a 50-layer upwind model diffuses that much); "
                  "the storage_mixing candidate fits beyond it", bounds=(0.0, 0.1)),
 )
+# How finely the storage resolves its thermocline, chosen before the re-fit (a discrete choice):
+# an independent tank's stratification spreads as its own discretisation and mixing make it.
+# The file's scheme is sharp (superbee, 40 layers); the storage kernel also offers the original
+# ProHMo model's first-order upwind scheme, whose numerical dispersion (about one layer per
+# passage of a front) is set by the layer count. Port mixing (switch.storage_inlet_mixing) is the
+# wrong shape for that: it smears only the inlet layers, so a sensor near a port responds too
+# slowly and hides its own lag (labsim sensor_lag_300: the top sensor's 300 s lag gained 0-25 %
+# on the sharp tank with 72-82 l of port mixing, 56-64 % on an upwind tank; none on no_effect).
+STORAGE_SCHEMES = (
+    ("file (superbee, 40 layers)", {}),
+    ("upwind, 20 layers", {"storage.limiter": 0, "storage.n_layers": 20}),
+    ("upwind, 30 layers", {"storage.limiter": 0, "storage.n_layers": 30}),
+    ("upwind, 50 layers", {"storage.limiter": 0, "storage.n_layers": 50}),
+    ("upwind, 80 layers", {"storage.limiter": 0, "storage.n_layers": 80}),
+)
 JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
 
 
@@ -116,9 +131,11 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
     window; sets replayer.base to them (every later replay starts from them). -> report entry."""
     params = nominal_params(house, refit, replayer.instances() - replayer.calibrated)
     refit = [q for q in refit if q.key in {p.name for p in params}]
-    if not params:
-        return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan}
     t_end = float(ctx.rec.time[ctx.train].max())
+    scheme = choose_storage_scheme(ctx, replayer, t_end)
+    if not params:
+        return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan,
+                "storage_scheme": scheme}
     cache = {}
 
     def F(theta):
@@ -141,7 +158,22 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
     ident = identifiability(F, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
                             theta, ctx.n_eff(ctx.train))
     return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
-            "evaluations": len(cache), "params": params, "identifiability": ident}
+            "evaluations": len(cache), "params": params, "identifiability": ident, "storage_scheme": scheme}
+
+
+def choose_storage_scheme(ctx, replayer, t_end: float) -> dict | None:
+    """The STORAGE_SCHEMES entry with the lowest training cost (everything else at the replayer's
+    base); it joins replayer.base. -> {chosen, overrides, train_cost {label: cost}} or None."""
+    if "storage" not in replayer.instances() - replayer.calibrated:
+        return None
+    costs = {}
+    for label, ov in STORAGE_SCHEMES:
+        rows = replayer.run(ov, until=t_end)
+        costs[label] = ctx.cost(rows[:, ctx.cols], ctx.train)
+    label = min(costs, key=costs.get)
+    chosen = dict(STORAGE_SCHEMES)[label]
+    replayer.base = {**replayer.base, **chosen}
+    return {"chosen": label, "overrides": chosen, "train_cost": costs}
 
 
 # identifiability: a calibrated parameter is pinned down when its approximate 1-sigma interval

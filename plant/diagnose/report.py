@@ -142,7 +142,8 @@ def nominal_refit(nref, ctx, sim0, best) -> dict:
                    "train_cost_refit": ctx.cost(sim0, ctx.train) if params else None,
                    "heldout_cost_refit": ctx.cost(sim0, ctx.held) if params else None,
                    "evaluations": nref.get("evaluations", 0),
-                   "identifiability": nref.get("identifiability")})
+                   "identifiability": nref.get("identifiability"),
+                   "storage_scheme": nref.get("storage_scheme")})
 
 
 def flag_bounds(rep, results) -> None:
