@@ -191,8 +191,10 @@ def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05) -> d
     -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
     identifiable: bool, why}."""
     k = len(theta)
-    u0 = np.array([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)])
-    steps = np.array([h if 0.0 <= u - h and u + h <= 1.0 else max(min(u, 1.0 - u), 1e-3) for u in u0])
+    # the curvature is taken a step inside the range when the optimum lies on a bound (the
+    # differences must stay where the model is defined)
+    u0 = np.clip([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)], h, 1.0 - h)
+    steps = np.full(k, h)
 
     def G(u):
         return F([a + x * (b - a) for x, a, b in zip(u, lo, hi)])

@@ -5,7 +5,8 @@ already holds the chosen effects, and judged by the same rules (verdict.judge) a
 instead of the nominal twin: held-out gain >= MIN_GAIN (or, for a sensor candidate judged on its
 own residual, LOCAL_GAIN of it), a better BIC and no parameter on a bound. The best accepted one
 joins, and the search repeats (at most MAX_EFFECTS effects). How a candidate goes on top:
-  * a sensor candidate is re-fitted on the current model's reading of each signal (fit.fit_signal);
+  * a sensor candidate is re-fitted on the current model's reading of each signal (fit.fit_signal,
+    without a second joint radiator fit);
   * a plant candidate with a sensor effect chosen: its own fitted replay, with the chosen sensor's
     column taken from the current model (the sensor effect explains that reading, the plant
     candidate the rest);
@@ -35,7 +36,9 @@ def _on_top(r, current, chosen, ctx, replayer):
     """Candidate r evaluated on top of the current model (sim `current`); None if it cannot be."""
     base = _based_on(ctx, current)
     if r.kind == "signal":
-        return fit.fit_signal(r.effect, base, current, replayer)
+        # on the radiator's return the first fit already re-fitted the radiator with the
+        # candidate: here it is judged on the current model's reading (no second joint fit)
+        return fit.fit_signal(r.effect, base, current)
     sensors = [c for c in chosen if c.kind == "signal"]
     plants = [c for c in chosen if c.kind == "simulate"]
     if plants:
