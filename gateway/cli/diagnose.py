@@ -67,6 +67,9 @@ def run(args) -> int:
     print(f"verdict: {rep['verdict']}" + (f"  effect: {rep['effect']} ({rep['component']})" if rep["effect"] else ""))
     for k, p in rep["parameters"].items():
         print(f"  {k} = {p['value']:.4g} +- {p['stderr'] or float('nan'):.2g} {p['unit']}")
+    for e in rep.get("effects", [])[1:]:  # forward selection: further effects on top of the first
+        print(f"  and {e['effect']} ({e['component']}): {e['summary']}, held-out gain "
+              f"{100 * e['heldout_gain_over_previous']:.0f} % over the model before it")
     for c, d in rep["energy"].items():
         if d.get("error_before_pct") is not None:
             print(f"  {c} heat error: {d['error_before_pct']:+.2f} % -> "
