@@ -29,7 +29,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
     rp.t_train = ctx.t_split
     radiator_cal = rp.calibrate_radiator(ctx.train)
-    if radiator_cal:
+    if radiator_cal and radiator_cal["calibrated"]:
         ctx.calibrated = tuple(replay.cut_mod.RADIATOR_OUTPUTS)
         log(f"radiator alone: {radiator_cal['elements']} elements, " + ", ".join(
             f"{k} {v:.4g}" for k, v in radiator_cal["values"].items()) + f", return RMS {radiator_cal['rms_K']:.3g} K")

@@ -474,7 +474,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
     t = ctx.rec.time
     best = None
     nfev = 0
-    alone = set(RADIATOR_OUTPUTS) if replayer is not None and replayer.radiator else set()
+    alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
         if CATALOGUE.signal(s).unit not in effect.signal_units:
             continue

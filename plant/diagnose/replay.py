@@ -88,6 +88,9 @@ def check(rec) -> list[str]:
     return warnings
 
 
+MIN_CALIBRATION_SAMPLES = 30  # flowing samples a subsystem calibrated alone needs in the training window
+
+
 class Replayer:
     """Drive the twin with a recording's commands (and, on a cut, its measured boundaries);
     `run(overrides)` -> simulated rows at the samples, in house 1's catalogue order (NaN for the
@@ -240,7 +243,15 @@ class Replayer:
         from .pipe_sensor import FLOWING
 
         flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > FLOWING
-        cal = cut_mod.calibrate_radiator(self.rec, self.house_name, train & flow & np.roll(flow, 1))
+        mask = train & flow & np.roll(flow, 1) & np.isfinite(self.rec.data["mixer.T_ret"])
+        if mask.sum() < MIN_CALIBRATION_SAMPLES:
+            why = (f"the heating circuit flows at {int(mask.sum())} recorded samples of the training window "
+                   f"(< {MIN_CALIBRATION_SAMPLES}): the radiator alone keeps the house file's rating and water "
+                   f"content in {self.radiator_elements} elements, and the nominal re-fit its rating")
+            self.notes.append(f"radiator alone not calibrated: {why}")
+            return {"calibrated": False, "why": why, "elements": self.radiator_elements}
+        cal = cut_mod.calibrate_radiator(self.rec, self.house_name, mask)
+        cal["calibrated"] = True
         self.radiator_elements = cal["elements"]
         self.base.update(cal["values"])
         self.calibrated.add("radiator")

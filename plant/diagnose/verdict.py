@@ -163,7 +163,7 @@ def select(results, ctx, nominal_sim, affected):
         # subsystem replayed alone) explains the share of that residual above the noise
         j = ctx.measured.index(best.signal)
         b, a = best.local["heldout_rms_before"] ** 2, best.local["heldout_rms_after"] ** 2
-        explained = float((b - a) / max(b - ctx.noise[j] ** 2, 1e-12))
+        explained = min(1.0, float((b - a) / max(b - ctx.noise[j] ** 2, 1e-12)))  # after below noise: all
     else:
         explained = explained_share(ctx, nominal_sim, best.sim, idx)
     twins = []

@@ -8,7 +8,7 @@ benchmarks/diagnose_cases.py.
 """
 import pytest
 
-from plant.diagnose import diagnose, recording_io, synth
+from plant.diagnose import diagnose, fit, recording_io, synth
 from plant.diagnose.effects import Effect, Param, catalogue, register, REGISTRY
 from plant.truth.recording import make_recording
 
@@ -201,12 +201,17 @@ def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(t
         lo, hi = p["bounds"]
         assert lo <= p["fitted_value"] <= hi, p
         if p["name"] == "switch.storage_inlet_mixing":  # absolute bounds around the file's ideal 0
-            assert (lo, hi) == (0.0, 0.1), p
+            assert (lo, hi) == (0.0, 0.05), p
             continue
         assert hi <= 1.2 * p["file_value"] and lo >= 0.8 * p["file_value"], p
     bounds = {p["name"]: p["bounds"] for p in nr["parameters"]}
+    schemes = [dict(sc) or None for _, sc in fit.STORAGE_SCHEMES]
+    assert nr["storage_scheme"]["chosen"] in [label for label, _ in fit.STORAGE_SCHEMES]
     for c in rep["candidates"]:
-        for k, v in (c.get("nominal_refit") or {}).items():
+        refit = dict(c.get("nominal_refit") or {})
+        scheme = {k: refit.pop(k) for k in ("storage.limiter", "storage.n_layers") if k in refit}
+        assert not scheme or scheme in schemes or scheme == {"storage.limiter": 3, "storage.n_layers": 40}, scheme
+        for k, v in refit.items():
             assert bounds[k][0] <= v <= bounds[k][1], (c["id"], k, v)
     assert "storage.UA_loss" not in rep["parameters"]  # heat_loss fits its own, wide-range value
     # the re-fitted baseline keeps the mismatch; the named effect removes most of it
