@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 import time
 
-from . import fit, forward, locate, parallel, pipe_sensor, recording_io, replay, search  # noqa: F401
+from . import calibration, fit, forward, locate, parallel, pipe_sensor, recording_io, replay, search  # noqa: F401
 from . import verdict as verdict_mod
 from .context import Context
 from .effects import catalogue
@@ -36,10 +36,10 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
     sim_file = nominal_rows[:, ctx.cols]
-    # nominal re-fit (fit.NOMINAL_REFIT, narrow bounds): the baseline is the best nominal twin
+    # nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds): the baseline is the best nominal twin
     nref = {"parameters": [], "params": []}
     if refit_nominal:
-        nref = fit.refit_nominal(ctx, rp, house)
+        nref = calibration.refit_nominal(ctx, rp, house)
         nominal_rows = rp.run()
         nref["train_cost_file"] = ctx.cost(sim_file, ctx.train)
         nref["heldout_cost_file"] = ctx.cost(sim_file, ctx.held)

@@ -291,7 +291,7 @@ def calibrate_radiator(rec, house: str, mask: np.ndarray) -> dict:
     values = trials[N][0]
     at = [q for q, v in values.items()
           if min(abs(v / file[q] - b) for b in RADIATOR_BOUNDS[q]) < 2e-3]
-    from .fit import identifiability
+    from .calibration import identifiability
 
     J, keys = _radiator_cost(rec, house, mask, N)
     t = rec.time[mask]

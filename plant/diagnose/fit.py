@@ -9,14 +9,8 @@ to its neighbours, common_mode).
 
 Judging and selection: verdict.py.
 
-Nominal re-fit (NOMINAL_REFIT): a few nominal twin parameters that are uncertain in the house
-file but matter for replay are re-fitted within narrow bounds (+-10..15 % of the file value) on
-the training window, (1) for the nominal model alone, so the "before" baseline is the best nominal
-twin (refit_nominal), and (2) jointly with each simulate-kind candidate's own parameters (one
-bounded Brent pass over them after the candidate's fit, then a local pass over the candidate's
-parameters again). The narrow bounds keep them from soaking up a missing effect. They count for
-the nominal model and every candidate alike, so they cancel in the BIC comparison. A candidate
-that fits one of them itself (heat_loss: storage.UA_loss) keeps its own, wide-range, value.
+Calibration of the nominal structure (the re-fit, the storage scheme, identifiability):
+calibration.py; bounded searches: bounded.py.
 """
 from __future__ import annotations
 
@@ -27,226 +21,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .effects.base import Param
+from .bounded import descent, from_u, scalar_search, to_u
+from .calibration import STORAGE_SCHEMES, file_scheme
 
-
-
-@dataclass(frozen=True)
-class NominalParam:
-    key: str          # house-file override "section.key"
-    rel: float        # bounds: file value * (1 -+ rel)
-    unit: str
-    why: str
-    bounds: tuple | None = None  # absolute bounds instead (a file value of 0: the ideal)
-
-
-# Uncertain in the house file, and each sets a replayed signal directly while the commands are
-# replayed (bounds narrow on purpose: an effect the twin lacks must not hide in them):
-NOMINAL_REFIT = (
-    NominalParam("storage.UA_loss", 0.15, "W/K",
-                 "storage standby loss (insulation, plant-room temperature): the slope of all ten "
-                 "storage sensors while no generator runs"),
-    NominalParam("radiator.Q_nominal", 0.10, "W",
-                 "radiator size (rating, valve settings): with the mixer set-points replayed it sets "
-                 "the heating return temperature, hence the storage bottom and switch return"),
-    NominalParam("zone.H_direct", 0.10, "W/K",
-                 "room-to-outdoor conductance (ventilation, leakage): the room temperature and, "
-                 "through it, the radiator emission"),
-    NominalParam("switch.storage_inlet_mixing", 0.0, "m3",
-                 "the inlet zone any real tank has at its ports and the file's ideal (0) lacks: up to "
-                 "50 l (2.5 of the file's 20 l layers); the storage_mixing candidate fits a plume "
-                 "beyond it. labsim's tank with no plume looks like 53 l on an upwind 80-layer twin "
-                 "(11 % of the held-out cost); 100 l, as before the storage scheme was calibrated, "
-                 "hid a 120 l plume", bounds=(0.0, 0.05)),
-)
-# How finely the storage resolves its thermocline, chosen before the re-fit (a discrete choice):
-# an independent tank's stratification spreads as its own discretisation and mixing make it.
-# The file's scheme is sharp (superbee, 40 layers); the storage kernel also offers the original
-# ProHMo model's first-order upwind scheme, whose numerical dispersion (about one layer per
-# passage of a front) is set by the layer count. Port mixing (switch.storage_inlet_mixing) is the
-# wrong shape for that (it was re-fitted up to 100 l before, now up to 50 l as an inlet zone):
-# it smears only the inlet
-# layers, so a sensor near a port responds too slowly and hides its own lag (labsim
-# sensor_lag_300: the top sensor's 300 s lag gained 0-25 % on the sharp tank with 72-82 l of
-# port mixing, 56-64 % on an upwind tank; none on no_effect). A port plume stays a candidate
-# (storage_mixing), fitted with the scheme chosen again jointly (fit_simulate).
-STORAGE_SCHEMES = (
-    ("file (superbee, 40 layers)", {}),
-    ("upwind, 20 layers", {"storage.limiter": 0, "storage.n_layers": 20}),
-    ("upwind, 30 layers", {"storage.limiter": 0, "storage.n_layers": 30}),
-    ("upwind, 50 layers", {"storage.limiter": 0, "storage.n_layers": 50}),
-    ("upwind, 80 layers", {"storage.limiter": 0, "storage.n_layers": 80}),
-)
 JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
-
-
-def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
-    """Param objects (name = override key, bounds = file value -+ rel) of the re-fitted nominals
-    (instances: those the replay has, Replayer.instances(); a cut replaces the radiator and the
-    room by measurements, so their parameters are not re-fitted there)."""
-    from ..declaration import load
-
-    spec = load(house)
-    out = []
-    for q in refit:
-        section, _, key = q.key.partition(".")
-        if instances is not None and section not in instances:
-            continue
-        inst = spec.instances[section]
-        if q.bounds is not None:
-            v = float(getattr(inst.params, key)) if hasattr(inst.params, key) else float(inst.options.get(key) or 0.0)
-            out.append(Param(q.key, q.bounds[0], q.bounds[1], min(max(v, q.bounds[0]), q.bounds[1]), q.unit))
-            continue
-        v = float(getattr(inst.params, key))
-        out.append(Param(q.key, v * (1.0 - q.rel), v * (1.0 + q.rel), v, q.unit))
-    return out
-
-
-def at_bound(p, v) -> bool:
-    """Whether a fitted value ends on a bound of its search range (in the search's scale): the
-    data asked for more than the parameter may give."""
-    lo, hi, u = _to_u(p, p.lo), _to_u(p, p.hi), _to_u(p, max(v, p.lo) if p.log else v)
-    return bool(min(u - lo, hi - u) <= 2e-3 * (hi - lo))
-
-
-def _descent(F, params, theta, idx, maxiter=6, n_grid=3):
-    """One coordinate pass: each parameter in idx by a coarse grid + bounded Brent over its whole
-    (narrow) range, the others held. -> (theta, cost, evaluations)."""
-    theta = list(theta)
-    J = F(theta)
-    nfev = 1
-    for i in idx:
-        p = params[i]
-
-        def f(v, i=i):
-            th = list(theta)
-            th[i] = v
-            return F(th)
-
-        v, Jv, k = _scalar_search(f, p, n_grid=n_grid, maxiter=maxiter)
-        nfev += k
-        if Jv < J:
-            theta[i], J = v, Jv
-    return theta, J, nfev
-
-
-def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
-    """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
-    window; sets replayer.base to them (every later replay starts from them). -> report entry."""
-    params = nominal_params(house, refit, replayer.instances() - replayer.calibrated)
-    refit = [q for q in refit if q.key in {p.name for p in params}]
-    t_end = float(ctx.rec.time[ctx.train].max())
-    scheme = choose_storage_scheme(ctx, replayer, t_end)
-    if not params:
-        return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan,
-                "storage_scheme": scheme}
-    cache = {}
-
-    def F(theta):
-        key = tuple(round(float(v), 9) for v in theta)
-        if key not in cache:
-            rows = replayer.run({p.name: float(v) for p, v in zip(params, theta)}, until=t_end)
-            cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
-        return cache[key]
-
-    theta0 = [p.nominal for p in params]
-    J_file = F(theta0)
-    theta, J, _ = _descent(F, params, theta0, range(len(params)))
-    replayer.base = {**replayer.base, **{p.name: float(v) for p, v in zip(params, theta)}}
-    rows = []
-    for p, q, v in zip(params, refit, theta):
-        rows.append({"name": p.name, "file_value": p.nominal, "fitted_value": float(v),
-                     "change_pct": 100.0 * (v / p.nominal - 1.0) if p.nominal else math.nan,
-                     "bounds": [p.lo, p.hi], "unit": p.unit,
-                     "at_bound": at_bound(p, v) and not (q.bounds is not None and v == p.nominal), "why": q.why})
-    ident = identifiability(F, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
-                            theta, ctx.n_eff(ctx.train))
-    return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
-            "evaluations": len(cache), "params": params, "identifiability": ident, "storage_scheme": scheme}
-
-
-def _file_scheme(replayer) -> dict:
-    """The storage scheme keys at the house file's values (to undo a chosen scheme in a run)."""
-    from ..declaration import load
-
-    prm = load(replayer.plant_name).instances["storage"].params
-    return {k: getattr(prm, k.split(".", 1)[1]) for _, sc in STORAGE_SCHEMES for k in sc}
-
-
-def choose_storage_scheme(ctx, replayer, t_end: float) -> dict | None:
-    """The STORAGE_SCHEMES entry with the lowest training cost (everything else at the replayer's
-    base); it joins replayer.base. -> {chosen, overrides, train_cost {label: cost}} or None."""
-    if "storage" not in replayer.instances() - replayer.calibrated:
-        return None
-    costs = {}
-    for label, ov in STORAGE_SCHEMES:
-        rows = replayer.run(ov, until=t_end)
-        costs[label] = ctx.cost(rows[:, ctx.cols], ctx.train)
-    label = min(costs, key=costs.get)
-    chosen = dict(STORAGE_SCHEMES)[label]
-    replayer.base = {**replayer.base, **chosen}
-    return {"chosen": label, "overrides": chosen, "train_cost": costs}
-
-
-# identifiability: a calibrated parameter is pinned down when its approximate 1-sigma interval
-# (from the cost's curvature) spans less than this share of its physical range, and no pair of
-# them trades off against each other (|correlation| above MAX_CORR)
-MAX_SPAN = 0.5
-MAX_CORR = 0.95
-
-
-def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05) -> dict:
-    """Local identifiability of a calibration at its optimum theta: the Hessian of the cost F in
-    range-normalised coordinates (u = (v - lo) / (hi - lo)) by central differences (steps h,
-    kept inside the range), the approximate covariance 2 J / n_eff * H^-1 as for every fitted
-    parameter here, each parameter's 1-sigma span as a share of its range and the correlations.
-    -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
-    identifiable: bool, why}."""
-    k = len(theta)
-    # the curvature is taken a step inside the range when the optimum lies on a bound (the
-    # differences must stay where the model is defined)
-    u0 = np.clip([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)], h, 1.0 - h)
-    steps = np.full(k, h)
-
-    def G(u):
-        return F([a + x * (b - a) for x, a, b in zip(u, lo, hi)])
-
-    J = G(u0)
-    H = np.zeros((k, k))
-    for i in range(k):
-        e = np.zeros(k)
-        e[i] = steps[i]
-        H[i, i] = (G(u0 + e) - 2.0 * J + G(u0 - e)) / steps[i] ** 2
-        for j in range(i):
-            f = np.zeros(k)
-            f[j] = steps[j]
-            H[i, j] = H[j, i] = (G(u0 + e + f) - G(u0 + e - f) - G(u0 - e + f) + G(u0 - e - f)) / (4 * steps[i] * steps[j])
-    out = {"parameters": [], "correlations": {}, "identifiable": True, "why": ""}
-    try:
-        cov = np.linalg.inv(H) * 2.0 * J / max(n_eff, 1.0)
-        ok = np.all(np.linalg.eigvalsh(H) > 0)
-    except np.linalg.LinAlgError:
-        cov, ok = np.full((k, k), np.inf), False
-    why = []
-    for i, name in enumerate(names):
-        span = float(np.sqrt(cov[i, i])) if ok and cov[i, i] > 0 else math.inf
-        ident = span <= MAX_SPAN
-        out["parameters"].append({"name": name, "sigma_share_of_range": span if math.isfinite(span) else None,
-                                  "identifiable": ident})
-        if not ident:
-            why.append(f"{name}: the cost hardly changes across its range (1-sigma span "
-                       f"{'unbounded' if not math.isfinite(span) else f'{span:.2f} of it'})")
-    for i in range(k):
-        for j in range(i):
-            if ok and cov[i, i] > 0 and cov[j, j] > 0:
-                r = float(cov[i, j] / math.sqrt(cov[i, i] * cov[j, j]))
-                out["correlations"][f"{names[j]}|{names[i]}"] = r
-                if abs(r) > MAX_CORR:
-                    why.append(f"{names[j]} and {names[i]} trade off (correlation {r:+.2f}): only a "
-                               "combination of them is pinned down")
-    out["identifiable"] = not why
-    out["why"] = "; ".join(why)
-    return out
 
 
 @dataclass
@@ -283,26 +61,6 @@ class Result:
                 "heldout_gain": self.held_gain, "bic": self.bic, "accepted": self.accepted,
                 "evaluations": self.evaluations, "nominal_refit": dict(self.nominal),
                 "parameters_at_bound": list(self.at_bound), "relative_to_neighbours": self.local}
-
-
-def _to_u(p, v):
-    return math.log(v) if p.log else v
-
-
-def _from_u(p, u):
-    return min(max(math.exp(u) if p.log else u, p.lo), p.hi)
-
-
-def _scalar_search(f, p, n_grid=6, maxiter=10):
-    lo, hi = _to_u(p, p.lo), _to_u(p, p.hi)
-    grid = np.linspace(lo, hi, n_grid)
-    vals = [f(_from_u(p, u)) for u in grid]
-    k = int(np.argmin(vals))
-    a, b = grid[max(0, k - 1)], grid[min(n_grid - 1, k + 1)]
-    res = minimize_scalar(lambda u: f(_from_u(p, u)), bounds=(a, b), method="bounded",
-                          options={"xatol": (hi - lo) * 2e-3, "maxiter": maxiter})
-    best_u, best_v = (res.x, res.fun) if res.fun <= vals[k] else (grid[k], vals[k])
-    return _from_u(p, best_u), float(best_v), n_grid + int(res.nfev)
 
 
 def _stderr(f, p, theta, J, n_eff):
@@ -375,21 +133,21 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
         nonlocal J
         for i in free:
             p = params[i]
-            lo, hi = _to_u(p, p.lo), _to_u(p, p.hi)
-            u = _to_u(p, theta[i])
+            lo, hi = to_u(p, p.lo), to_u(p, p.hi)
+            u = to_u(p, theta[i])
             d = 0.15 * (hi - lo)
             f = along(i)
-            res = minimize_scalar(lambda x: f(_from_u(p, x)), bounds=(max(lo, u - d), min(hi, u + d)),
+            res = minimize_scalar(lambda x: f(from_u(p, x)), bounds=(max(lo, u - d), min(hi, u + d)),
                                   method="bounded", options={"xatol": (hi - lo) * 2e-3, "maxiter": 8})
             if res.fun < J:
-                theta[i], J = _from_u(p, res.x), float(res.fun)
+                theta[i], J = from_u(p, res.x), float(res.fun)
 
     for i in free:
-        theta[i], J, _ = _scalar_search(along(i), params[i])
+        theta[i], J, _ = scalar_search(along(i), params[i])
     if len(free) > 1:
         local_pass()
     if nom:
-        th, Jn, _ = _descent(F, allp, theta, range(ne, ne + len(nom)), maxiter=5)
+        th, Jn, _ = descent(F, allp, theta, range(ne, ne + len(nom)), maxiter=5)
         if Jn < J:
             theta[:], J = th, Jn
             local_pass()
@@ -399,7 +157,7 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
         best = dict(scheme), J
         for _, sc in STORAGE_SCHEMES:
             scheme.clear()
-            scheme.update(sc or _file_scheme(replayer))  # the file's: undo the nominal's choice
+            scheme.update(sc or file_scheme(replayer))  # the file's: undo the nominal's choice
             Js = F(theta)
             if Js < best[1] - 1e-12:
                 best = dict(scheme), Js
@@ -490,7 +248,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
             if effect.id == "sensor_offset":
                 v = float(np.clip(np.mean(ctx.meas[m, j] - y0[m]), p.lo, p.hi))
                 return v, f(v), 1, f
-            return _scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
+            return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
 
         y_before = y0
         v, J, k, f = fit_on(y0)

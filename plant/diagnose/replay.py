@@ -120,7 +120,7 @@ class Replayer:
                                  "-> return)" if self.radiator else ""))
         self._checked = False
         self._cache: tuple | None = None
-        # re-fitted nominal parameters (fit.refit_nominal): applied to every run; a run's own
+        # re-fitted nominal parameters (calibration.refit_nominal): applied to every run; a run's own
         # overrides take precedence over them
         self.base: dict = {}
         self.sensors = rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}

@@ -19,7 +19,8 @@ import math
 
 import numpy as np
 
-from .fit import LOCAL_GAIN, at_bound
+from .bounded import at_bound
+from .fit import LOCAL_GAIN
 
 MIN_GAIN = 0.10
 EXPLAIN = 0.60

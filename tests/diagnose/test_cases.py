@@ -8,7 +8,7 @@ benchmarks/diagnose_cases.py.
 """
 import pytest
 
-from plant.diagnose import diagnose, fit, recording_io, synth
+from plant.diagnose import calibration, diagnose, recording_io, synth
 from plant.diagnose.effects import Effect, Param, catalogue, register, REGISTRY
 from plant.truth.recording import make_recording
 
@@ -205,8 +205,8 @@ def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(t
             continue
         assert hi <= 1.2 * p["file_value"] and lo >= 0.8 * p["file_value"], p
     bounds = {p["name"]: p["bounds"] for p in nr["parameters"]}
-    schemes = [dict(sc) or None for _, sc in fit.STORAGE_SCHEMES]
-    assert nr["storage_scheme"]["chosen"] in [label for label, _ in fit.STORAGE_SCHEMES]
+    schemes = [dict(sc) or None for _, sc in calibration.STORAGE_SCHEMES]
+    assert nr["storage_scheme"]["chosen"] in [label for label, _ in calibration.STORAGE_SCHEMES]
     for c in rep["candidates"]:
         refit = dict(c.get("nominal_refit") or {})
         scheme = {k: refit.pop(k) for k in ("storage.limiter", "storage.n_layers") if k in refit}

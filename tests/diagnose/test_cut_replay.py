@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from plant.diagnose import cut, locate, replay, synth
-from plant.diagnose import fit, pipe_sensor
+from plant.diagnose import calibration, pipe_sensor
 from plant.diagnose.context import Context
 from plant.diagnose.pipe_sensor import scored_mask
 
@@ -148,12 +148,12 @@ def test_the_radiator_alone_calibration_finds_elements_rating_and_water():
 
 def test_identifiability_names_a_flat_parameter_and_a_trade_off():
     # J = (a + b - 1)^2 + 0.01: a and b trade off; J = (a - 0.3)^2 + 1e-9 c + 0.01: c is flat
-    trade = fit.identifiability(lambda v: (v[0] + v[1] - 1.0) ** 2 + 0.01 * (v[0] - 0.5) ** 2 + 0.01,
+    trade = calibration.identifiability(lambda v: (v[0] + v[1] - 1.0) ** 2 + 0.01 * (v[0] - 0.5) ** 2 + 0.01,
                                 ["a", "b"], [0, 0], [1, 1], [0.5, 0.5], 100.0)
     assert not trade["identifiable"] and "trade off" in trade["why"] and trade["correlations"]["a|b"] < -0.95
-    flat = fit.identifiability(lambda v: (v[0] - 0.3) ** 2 + 1e-9 * v[1] ** 2 + 0.01,
+    flat = calibration.identifiability(lambda v: (v[0] - 0.3) ** 2 + 1e-9 * v[1] ** 2 + 0.01,
                                ["a", "c"], [0, 0], [1, 1], [0.3, 0.5], 100.0)
     assert [p["identifiable"] for p in flat["parameters"]] == [True, False] and "c:" in flat["why"]
-    sharp = fit.identifiability(lambda v: (v[0] - 0.3) ** 2 + (v[1] - 0.6) ** 2 + 0.01,
+    sharp = calibration.identifiability(lambda v: (v[0] - 0.3) ** 2 + (v[1] - 0.6) ** 2 + 0.01,
                                 ["a", "b"], [0, 0], [1, 1], [0.3, 0.6], 100.0)
     assert sharp["identifiable"] and sharp["why"] == ""

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from plant.catalogue import CATALOGUE
-from plant.diagnose import diagnose, recording_io, report
+from plant.diagnose import diagnose, plots, recording_io
 from plant.labsim.suite import make_case
 
 DAYS, TRAIN, DPI = 1.5, 0.6, 80
@@ -58,10 +58,10 @@ def test_the_largest_error_share_is_plotted_with_its_worst_mismatched_signals(di
     for d in subs:
         axes = rep["plots"]["subsystem_axes"][d["subsystem"]]
         pool = d["mismatched_signals"] or d["signals"]
-        assert 1 <= len(axes) <= report.PLOT_AXES
+        assert 1 <= len(axes) <= plots.PLOT_AXES
         assert len({a["unit"] for a in axes}) == len(axes)
         for a in axes:
-            assert 1 <= len(a["signals"]) <= report.PLOT_PER_AXIS
+            assert 1 <= len(a["signals"]) <= plots.PLOT_PER_AXIS
             assert all(s in pool and CATALOGUE.signal(s).unit == a["unit"] for s in a["signals"])
             # the shown signals are those of their unit with the largest held-out RMSE (nominal twin)
             err = {s: rep["signals"][s]["heldout_rmse_before"] for s in pool if CATALOGUE.signal(s).unit == a["unit"]}
@@ -71,7 +71,7 @@ def test_the_largest_error_share_is_plotted_with_its_worst_mismatched_signals(di
             if left_out:
                 assert min(shown) >= max(left_out)
     # storage has ten mismatched sensors on one unit: capped
-    assert [len(a["signals"]) for a in rep["plots"]["subsystem_axes"]["storage"]] == [report.PLOT_PER_AXIS]
+    assert [len(a["signals"]) for a in rep["plots"]["subsystem_axes"]["storage"]] == [plots.PLOT_PER_AXIS]
 
 
 def test_the_held_out_window_is_shaded(diagnosed):
@@ -117,12 +117,12 @@ def test_plot_axes_prefer_mismatched_signals_one_axis_per_unit_worst_first():
     others = ["boiler.m_flow", "boiler.Q_flow", "chp.P_el"]
     err = {s: float(i) for i, s in enumerate(temps)} | {"boiler.m_flow": 50.0, "boiler.Q_flow": 3.5,
                                                          "chp.P_el": math.nan}
-    axes = report._plot_axes(temps + others, temps + others, err)
+    axes = plots.plot_axes(temps + others, temps + others, err)
     assert [a["unit"] for a in axes] == ["kg/s", "degC", "W"]
-    assert axes[1]["signals"] == temps[::-1][: report.PLOT_PER_AXIS]
+    assert axes[1]["signals"] == temps[::-1][: plots.PLOT_PER_AXIS]
     assert axes[2]["signals"] == ["boiler.Q_flow", "chp.P_el"]  # never scored: last
     # only the mismatched signals when there are any; all of them when there are none
-    assert report._plot_axes(temps + others, ["chp.P_el"], err) == [{"unit": "W", "signals": ["chp.P_el"]}]
-    assert len(report._plot_axes(temps + others, [], err)) == 3
+    assert plots.plot_axes(temps + others, ["chp.P_el"], err) == [{"unit": "W", "signals": ["chp.P_el"]}]
+    assert len(plots.plot_axes(temps + others, [], err)) == 3
     # a signal without any measured value (not in err) is not plotted
-    assert report._plot_axes(["zone.T_room"], ["zone.T_room"], err) == []
+    assert plots.plot_axes(["zone.T_room"], ["zone.T_room"], err) == []
