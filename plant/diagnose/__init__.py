@@ -33,6 +33,10 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         ctx.calibrated = tuple(replay.cut_mod.RADIATOR_OUTPUTS)
         log(f"radiator alone: {radiator_cal['elements']} elements, " + ", ".join(
             f"{k} {v:.4g}" for k, v in radiator_cal["values"].items()) + f", return RMS {radiator_cal['rms_K']:.3g} K")
+    mixer_cal = rp.calibrate_mixer(ctx.train)
+    if mixer_cal and mixer_cal["calibrated"]:
+        log("mixing station alone: " + ", ".join(f"{k} {v:.4g}" for k, v in mixer_cal["values"].items())
+            + f", supply RMS {mixer_cal['rms_file_K']:.3g} -> {mixer_cal['rms_K']:.3g} K")
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
     sim_file = nominal_rows[:, ctx.cols]
@@ -109,10 +113,12 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
             f"{r.id} ({r.effect.summary(r.theta, ctx, r.rows)}{' on ' + r.signal if r.signal else ''}, held-out "
             f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in chosen[1:])
     rep["radiator_calibration"] = radiator_cal
+    rep["mixer_calibration"] = mixer_cal
     rep["pipe_sensors"] = {flow: {"tau_s": tau if 0 < tau < math.inf else None,
                                   "reading": "cools" if 0 < tau < math.inf else "holds" if tau else "as simulated",
                                   "at_bound": pipe_sensor.at_bound(tau),
-                                  "T_plant_room_degC": rp._T_room}
+                                  "T_plant_room_degC": rp._T_room,
+                                  "T_plant_room_from": rp._T_room_from}
                            for flow, tau in pipe_tau.items()}
     _report.flag_bounds(rep, results)
     if out is not None:

@@ -160,6 +160,21 @@ def mismatched_signals(ctx, sim, mask, tol: float = 0.3, tol_rms: float = 1.0) -
     return out
 
 
+def moved_signals(ctx, before, after, mask, tol: float = 0.3) -> list[str]:
+    """Signals a fitted effect acts on: where its run differs from the run without it by more
+    than the persistent-mismatch tolerance of mismatched_signals (tol x scale + 3 noise sigma, RMS
+    over the scored samples of the window), whether the change brings them closer or not."""
+    m = mask[: min(len(before), len(after))]
+    d = np.where(ctx.ok[: len(m)], after[: len(m)] - before[: len(m)], np.nan)[m]
+    out = []
+    for j, s in enumerate(ctx.measured):
+        with np.errstate(invalid="ignore"):
+            rms = float(np.sqrt(np.nanmean(d[:, j] ** 2))) if np.isfinite(d[:, j]).any() else 0.0
+        if rms > tol * ctx.scale[j] + 3.0 * ctx.noise[j]:
+            out.append(s)
+    return out
+
+
 def windows(ctx, sim: np.ndarray, top: int = 5, hours: float = 1.0) -> list[dict]:
     """Time windows that carry the error: 1-h rolling mean of the normalised squared residual."""
     r = ctx.residual(sim)

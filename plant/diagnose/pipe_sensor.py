@@ -19,6 +19,15 @@ cancels in their comparison), or the reading holds, or it is the replay's own st
 (AS_SIMULATED: the twin's own recordings); a value on a bound of the range is reported. A replay
 that fits nothing (no training window given) keeps its own value.
 
+The temperature the pipes cool toward (the air around them, not the storage's T_env) is read off
+the recording, not fitted in each replay: the lowest of the branches' median readings after
+ROOM_AFTER of recorded standstill (plant_room). labsim's pipes cool toward 20 degC, and the house
+file's 18 degC left 2 K on all four generator pipe sensors through every long standstill. Fitted
+with tau in each replay instead, the nominal twin's idle CHP "cooled toward" 34 degC on labsim's
+idle_flow_small, the return water an idle flow makes it read: the asymptote took the evidence.
+The lowest branch, because a branch kept warm by a flow nobody recorded reads above the room,
+never below it.
+
 Scored samples: all but those at which the recorded flow evidence (the branch's measured flow,
 else its command) switches: there the sample's instant within the interval is unknown.
 """
@@ -43,6 +52,10 @@ TAU_RANGE = (300.0, 7200.0)    # s: a bare DN20-40 pipe ... a lagged one with an
 AS_SIMULATED = 0.0
 TAU_GRID = np.concatenate([[AS_SIMULATED], np.geomspace(*TAU_RANGE, 14), [np.inf]])
 T_PLANT_ROOM_DEFAULT = 20.0    # degC, when the replayed house has no storage stating T_env
+ROOM_RANGE = (5.0, 35.0)       # degC: what a pipe may cool toward (a plant room, a cellar, a loft)
+ROOM_AFTER = 6 * 3600.0        # s of recorded standstill after which a pipe reads its room (5 tau at
+#                                the range's middle; at its longest tau, within 5 % of the step)
+MIN_ROOM_SAMPLES = 10
 
 
 def branches() -> dict:
@@ -76,6 +89,27 @@ def scored_mask(rec, measured) -> np.ndarray:
     return out
 
 
+def plant_room(rec) -> float | None:
+    """The temperature the stagnant pipes cool toward, from the recording: per branch, the median
+    reading of its sensors at samples ROOM_AFTER or longer after its last recorded flow; the
+    lowest branch's, within ROOM_RANGE. None: no branch stands that long."""
+    t = rec.time
+    out = []
+    for sensors in branches().values():
+        f = next((recorded_flowing(rec, s) for s in sensors if rec.has(s)), None)
+        if f is None:
+            continue
+        last = np.where(f, np.arange(len(t)), -1)
+        np.maximum.accumulate(last, out=last)
+        since = np.where(last >= 0, t - t[np.maximum(last, 0)], t - t[0])
+        long = ~f & (since >= ROOM_AFTER)
+        vals = np.concatenate([rec.data[s][long] for s in sensors if rec.has(s)])
+        vals = vals[np.isfinite(vals)]
+        if vals.size >= MIN_ROOM_SAMPLES:
+            out.append(float(np.median(vals)))
+    return min(max(min(out), ROOM_RANGE[0]), ROOM_RANGE[1]) if out else None
+
+
 def cooled(t: np.ndarray, fluid: np.ndarray, flowing: np.ndarray, tau: float, T_room: float) -> np.ndarray:
     """The sensor reading: `fluid` while flowing, else the last flowing value relaxing toward
     T_room with time constant tau (before the first flowing sample: from the first value);
@@ -92,8 +126,9 @@ def cooled(t: np.ndarray, fluid: np.ndarray, flowing: np.ndarray, tau: float, T_
 
 def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
-    modelled reading; tau per branch fitted on the samples up to t_fit (None: no fit, the grid's
-    middle). cols: catalogue name -> column of the signals the replay computes. -> {flow signal: tau}."""
+    modelled reading (cooling toward T_room); tau per branch fitted on the samples up to t_fit
+    (None: no fit, the replay's own value). cols: catalogue name -> column of the signals the
+    replay computes. -> {flow signal: tau}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
     taus = {}

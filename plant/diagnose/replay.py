@@ -155,9 +155,16 @@ class Replayer:
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
 
     def _plant_room(self) -> float:
+        """What the stagnant pipes cool toward: read off the recording's long standstills
+        (pipe_sensor.plant_room), else the replayed house's storage.T_env."""
         from ..declaration import load
 
+        room = pipe_sensor.plant_room(self.rec)
+        if room is not None:
+            self._T_room_from = "recording (pipes after 6 h of standstill)"
+            return room
         inst = load(self.plant_name).instances.get("storage")
+        self._T_room_from = "house file (storage.T_env)"
         return float(inst.params.T_env) if inst is not None and hasattr(inst.params, "T_env") \
             else pipe_sensor.T_PLANT_ROOM_DEFAULT
 
@@ -235,26 +242,50 @@ class Replayer:
         self._checked = True
         return out
 
+    def _circuit_training(self, train: np.ndarray, signal: str, what: str, keeps: str):
+        """The training samples at which the circuit flows (and flowed the sample before) and
+        `signal` is recorded -> (mask, None), or (None, the report entry saying why `what` is not
+        calibrated: too few of them)."""
+        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
+        mask = train & flow & np.roll(flow, 1) & np.isfinite(self.rec.data[signal])
+        if mask.sum() >= MIN_CALIBRATION_SAMPLES:
+            return mask, None
+        why = (f"the heating circuit flows at {int(mask.sum())} recorded samples of the training window "
+               f"(< {MIN_CALIBRATION_SAMPLES}): {keeps}")
+        self.notes.append(f"{what} not calibrated: {why}")
+        return None, {"calibrated": False, "why": why}
+
     def calibrate_radiator(self, train: np.ndarray) -> dict | None:
         """Calibrate the radiator replayed alone on the recorded return over the training samples
         at which the circuit flows (cut.calibrate_radiator); later runs use it. -> report entry."""
         if not self.radiator:
             return None
-        from .pipe_sensor import FLOWING
-
-        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > FLOWING
-        mask = train & flow & np.roll(flow, 1) & np.isfinite(self.rec.data["mixer.T_ret"])
-        if mask.sum() < MIN_CALIBRATION_SAMPLES:
-            why = (f"the heating circuit flows at {int(mask.sum())} recorded samples of the training window "
-                   f"(< {MIN_CALIBRATION_SAMPLES}): the radiator alone keeps the house file's rating and water "
-                   f"content in {self.radiator_elements} elements, and the nominal re-fit its rating")
-            self.notes.append(f"radiator alone not calibrated: {why}")
-            return {"calibrated": False, "why": why, "elements": self.radiator_elements}
+        mask, skipped = self._circuit_training(
+            train, "mixer.T_ret", "radiator alone",
+            f"the radiator alone keeps the house file's rating and water content in {self.radiator_elements} "
+            "elements, and the nominal re-fit its rating")
+        if skipped:
+            return {**skipped, "elements": self.radiator_elements}
         cal = cut_mod.calibrate_radiator(self.rec, self.house_name, mask)
         cal["calibrated"] = True
         self.radiator_elements = cal["elements"]
         self.base.update(cal["values"])
         self.calibrated.add("radiator")
+        return cal
+
+    def calibrate_mixer(self, train: np.ndarray) -> dict | None:
+        """Calibrate the mixing station replayed alone on the recorded supply after mixing over
+        the training samples at which the circuit flows (cut.calibrate_mixer); later runs use it.
+        -> report entry."""
+        if not self.circuit:
+            return None
+        mask, skipped = self._circuit_training(train, "mixer.T_sup", "mixing station alone",
+                                               "the mixing station keeps the house file's actuator and gain")
+        if skipped:
+            return skipped
+        cal = cut_mod.calibrate_mixer(self.rec, self.house_name, mask)
+        cal["calibrated"] = True
+        self.base.update(cal["values"])
         return cal
 
     def radiator_return(self, values: dict, elements: int | None = None) -> np.ndarray:

@@ -69,9 +69,14 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
                       "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
                       "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"],
                       "subsystem": subsystem(s), "guideline_14_hourly": g14}
+    # the affected signals: a sensor effect's own signal; those a plant effect moves (beyond the
+    # mismatch tolerance), not the structural residual elsewhere it does not touch; else those
+    # mismatched
     affected = loc["mismatched_signals"]
     if best is not None and best.signal:
         affected = [best.signal]
+    elif best is not None:
+        affected = locate.moved_signals(ctx, sim0, after, ctx.held) or affected
     by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(s) != "K"))
     energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
     energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
@@ -152,6 +157,10 @@ def flag_bounds(rep, results) -> None:
     that ended on a bound of their range; the finding names them."""
     flags = [{"parameter": p["name"], "value": p["fitted_value"], "bounds": p["bounds"], "stage": "calibration"}
              for p in rep["nominal_refit"]["parameters"] if p.get("at_bound")]
+    for key in ("radiator_calibration", "mixer_calibration"):  # the subsystems calibrated alone
+        cal = rep.get(key) or {}
+        flags += [{"parameter": name, "value": cal["values"][name], "bounds": cal["bounds"][name],
+                   "stage": "calibration"} for name in (cal.get("at_bound") or []) if cal.get("calibrated")]
     for r in results:
         for name in getattr(r, "at_bound", []):
             i = [p.name for p in r.effect.params].index(name)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..catalogue import CATALOGUE
+from .effects.sensor import first_order
 from .recording_io import Samples, write_csv
 from .replay import BOUNDARY, COMMANDS
 
@@ -64,12 +65,8 @@ def make(effect: str = "none", size: float | None = None, days: float = 3.0, sta
     rng = np.random.default_rng(seed)
     for s in signals:
         v = rows[:, col[s]].copy()
-        if kind == "lag" and s == key:
-            a = np.exp(-interval / size)
-            y = v.copy()
-            for i in range(1, len(v)):
-                y[i] = a * y[i - 1] + (1 - a) * v[i]
-            v = y
+        if kind == "lag" and s == key:  # the continuous lag of the signal between its samples
+            v = first_order(times, v, size)
         elif kind == "offset" and s == key:
             v = v + size
         elif kind == "delay" and s == key:

@@ -61,6 +61,7 @@ class LabHouse:
         self.storage = Tank(0.8, 1.63, 50, e["storage_UA"], 18.0, 45.0, 70.0)
         self.dhw = Tank(0.5, 1.51, 30, 7.0, 18.0, 40.0, 60.0)
         plume = max(1, int(round(e["plume_litres"] / (self.storage.M)))) if e["plume_litres"] > 0 else 1
+        self.plume_litres_applied = plume * self.storage.M  # whole layers: 120 l asked is 8 x 16 l
         self.w_top = self.storage.spread(1.55, plume, downward=True)
         self.w_bottom = self.storage.spread(0.08, plume, downward=False)
         self.top, self.bottom = self.storage.layer(1.55), self.storage.layer(0.08)

@@ -75,8 +75,11 @@ def make_case(case: str, out: str | Path, days: float = 7.0, start: str = "2021-
         raise KeyError(f"case {case!r}: unknown; known: {', '.join(CASES)}")
     desc, effects, expected, sizes = CASES[case]
     seed = list(CASES).index(case) + 1 if seed is None else seed
+    house = LabHouse(start, effects)
+    if "plume_litres" in sizes:  # the plume the tank applies: whole layers
+        sizes = {**sizes, "plume_litres_applied": house.plume_litres_applied}
     truth = {"case": case, "description": desc, "effects": effects, "sizes": sizes, "expected": expected}
-    return record(LabHouse(start, effects), out, days, seed, start, truth, command)
+    return record(house, out, days, seed, start, truth, command)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,5 +1,6 @@
 """The diagnosis replays on a cut: measured boundaries instead of the twin's own load profiles;
-stagnant-pipe sensors modelled; the radiator alone as calibrated elements; Guideline 14 figures;
+stagnant-pipe sensors modelled; the radiator alone as calibrated elements; the mixing station
+alone calibrated; Guideline 14 figures;
 verdicts when no candidate explains a mismatch."""
 import math
 
@@ -97,6 +98,26 @@ def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
     assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
 
 
+def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
+    # the CHP stands 8 h in a 23 degC room; the boiler stands as long but an unrecorded flow
+    # keeps its pipe at 35 degC (it reads above the room, never below it): the room is 23 degC
+    t = np.arange(0.0, 24 * 3600.0, 60.0)
+    flowing = (t % (12 * 3600.0)) < 4 * 3600.0
+    chp = pipe_sensor.cooled(t, np.full(t.size, 70.0), flowing, 1500.0, 23.0)
+
+    class Rec:
+        time = t
+        data = {"chp.T_sup": chp, "chp.m_flow": np.where(flowing, 0.1, 0.0),
+                "boiler.T_sup": np.where(flowing, 70.0, 35.0), "boiler.m_flow": np.where(flowing, 0.2, 0.0)}
+
+        def has(self, s):
+            return s in self.data
+
+    assert abs(pipe_sensor.plant_room(Rec()) - 23.0) < 0.01
+    Rec.data["chp.m_flow"] = Rec.data["boiler.m_flow"] = np.full(t.size, 0.1)  # nothing stands 6 h
+    assert pipe_sensor.plant_room(Rec()) is None
+
+
 def test_guideline_14_hourly_figures_follow_their_formula():
     rec = synth.make("none", days=0.5, noise=False)
     ctx = Context.build(rec, train_days=0.2)
@@ -144,6 +165,33 @@ def test_the_radiator_alone_calibration_finds_elements_rating_and_water():
     assert abs(cal["values"]["radiator.Q_nominal"] / 7000.0 - 1.0) < 0.02
     assert abs(cal["values"]["radiator.V_water"] / 0.12 - 1.0) < 0.05
     assert cal["identifiability"]["identifiable"] and not cal["at_bound"]
+
+
+def test_the_mixing_station_alone_calibration_finds_its_actuator_and_gain():
+    # a slower actuator and a stronger integrator than the file's (120 s, 2e-4 1/(K s)): the
+    # supply after mixing, recorded with 0.05 K noise, gives both back
+    rec = synth.make("none", days=1.5, signals=CIRCUIT, noise=False)
+    truth = {"mixer.t_stroke": 240.0, "mixer.K_i": 1e-3}
+    rec.data["mixer.T_sup"] = cut.replay_circuit(rec, "house1", truth, len(rec.time))["mixer.T_sup"] \
+        + np.random.default_rng(2).normal(0.0, 0.05, len(rec.time))
+    flow = rec.data["mixer.m_flow"] > 1e-3
+    cal = cut.calibrate_mixer(rec, "house1", flow & (rec.time < rec.time[0] + 86400.0))
+    assert cal["rms_K"] < 0.06 < 0.5 < cal["rms_file_K"], cal
+    for q, v in truth.items():
+        assert abs(cal["values"][q] / v - 1.0) < 0.2, cal
+    assert not cal["at_bound"]
+
+
+def test_a_circuit_that_never_flows_in_training_keeps_the_file_values_and_says_why():
+    rec = synth.make("none", days=0.5, signals=CIRCUIT, noise=False)
+    rec.data["mixer.m_flow"] = np.zeros(len(rec.time))
+    rp = replay.Replayer(rec)
+    assert rp.circuit and rp.radiator
+    train = rec.time < rec.time[0] + 0.2 * 86400.0
+    for cal in (rp.calibrate_radiator(train), rp.calibrate_mixer(train)):
+        assert cal["calibrated"] is False and "flows at 0 recorded samples" in cal["why"], cal
+    assert not rp.base and not rp.calibrated and rp.radiator_elements == 5
+    assert sum("not calibrated" in n for n in rp.notes) == 2
 
 
 def test_identifiability_names_a_flat_parameter_and_a_trade_off():

@@ -3,8 +3,8 @@ with the twin: its own hydraulics, 50-layer tank, three-node radiator, building 
 DAQ column names and units through a columns file. Short (3-day) versions of public-suite cases,
 each exercising one part of the method on independent data:
 
-  * no_effect: the calibrations (storage scheme, radiator alone, pipe sensors) leave nothing a
-    candidate may claim;
+  * no_effect: the calibrations (storage scheme, radiator alone, pipe sensors, the switch's
+    headers) leave nothing a candidate may claim;
   * idle_flow_small: the stagnant-pipe sensor model turns an idle CHP that keeps flowing into
     evidence (masked, it was missed);
   * transport_delay_600: the radiator replayed alone, calibrated, with the delay fitted jointly
@@ -39,7 +39,12 @@ def test_the_independent_lab_with_no_effect_is_not_blamed(labsim):
     assert rep["verdict"] == "no_missing_physics" and rep["effect"] is None, rep["finding"]
     assert rep["radiator_calibration"]["rms_K"] < 0.3          # the radiator alone, calibrated
     assert 600.0 < rep["pipe_sensors"]["chp.m_flow"]["tau_s"] < 3000.0  # labsim's pipes: 1,200 s
+    assert abs(rep["pipe_sensors"]["chp.m_flow"]["T_plant_room_degC"] - 20.0) < 0.5  # ... toward 20 degC
     assert rep["nominal_refit"]["storage_scheme"]["chosen"].startswith("upwind")
+    # the switch's headers, calibrated on its two sensors: labsim's hold 20 kg each and lose nothing
+    fitted = {p["name"]: p["fitted_value"] for p in rep["nominal_refit"]["parameters"]}
+    assert abs(fitted["supply_header.V"] / 0.020 - 1.0) < 0.25, fitted
+    assert fitted["supply_header.UA_loss"] < 0.3, fitted
 
 
 def test_an_idle_chp_that_keeps_flowing_is_found_through_its_pipe_sensors(labsim):
