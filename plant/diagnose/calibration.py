@@ -139,10 +139,7 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
         key = tuple(round(float(v), 9) for v in theta) + tuple(signals)
         if key not in cache:
             rows = replayer.run(overrides(theta), until=t_end)
-            js = [ctx.measured.index(s) for s in signals if s in ctx.measured]
-            sim = rows[:, ctx.cols]
-            mse = ctx.per_signal_mse(sim, ctx.train) / ctx.scale ** 2
-            cache[key] = float(np.nanmean(mse[js] if js else mse))
+            cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train, signals=signals)
         return cache[key]
 
     theta0 = [p.nominal for p in params]

@@ -103,11 +103,14 @@ class Context:
         with np.errstate(invalid="ignore"):
             return np.nanmean(r[m] ** 2, axis=0) if m.any() else np.full(r.shape[1], np.nan)
 
-    def cost(self, sim_meas: np.ndarray, mask: np.ndarray, per_signal: np.ndarray | None = None) -> float:
-        """Mean over signals of the normalised mean squared residual."""
+    def cost(self, sim_meas: np.ndarray, mask: np.ndarray, per_signal: np.ndarray | None = None,
+             signals=()) -> float:
+        """Mean over signals (those of `signals` that are measured, when given) of the normalised
+        mean squared residual."""
         mse = self.per_signal_mse(sim_meas, mask) if per_signal is None else per_signal
         v = mse / self.scale ** 2
-        return float(np.nanmean(v))
+        idx = [self.measured.index(s) for s in signals if s in self.measured]
+        return float(np.nanmean(v[idx] if idx else v))
 
     def noise_cost(self) -> float:
         return float(np.nanmean((self.noise / self.scale) ** 2))

@@ -174,6 +174,8 @@ def calibrate_mixer(rec, house: str, mask: np.ndarray) -> dict:
     from scipy.optimize import minimize
 
     from ..declaration import load
+    from .bounded import at_bound
+    from .effects.base import Param
 
     prm = load(house).instances["mixer"].params
     keys = list(MIXER_BOUNDS)
@@ -196,7 +198,7 @@ def calibrate_mixer(rec, house: str, mask: np.ndarray) -> dict:
     u = np.clip(res.x, lo, hi)
     values = dict(zip(keys, (float(v) for v in np.exp(u))))
     return {"values": values, "rms_K": float(np.sqrt(J(u))), "rms_file_K": float(np.sqrt(J_file)),
-            "at_bound": [q for q, a, b, x in zip(keys, lo, hi, u) if min(x - a, b - x) <= 2e-3 * (b - a)],
+            "at_bound": [q for q in keys if at_bound(Param(q, *MIXER_BOUNDS[q], file[q], "", log=True), values[q])],
             "file_values": file, "bounds": {q: list(b) for q, b in MIXER_BOUNDS.items()}}
 
 

@@ -133,7 +133,7 @@ class Replayer:
         self.radiator_elements = 5
         self.calibrated: set = set()
         self._layout()
-        self._T_room = self._plant_room()
+        self._T_room, self._T_room_from = self._plant_room()
 
     def _layout(self) -> None:
         from ..compiler import catalogue_of
@@ -154,19 +154,18 @@ class Replayer:
             simulated += list(cut_mod.RADIATOR_OUTPUTS)
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
 
-    def _plant_room(self) -> float:
-        """What the stagnant pipes cool toward: read off the recording's long standstills
-        (pipe_sensor.plant_room), else the replayed house's storage.T_env."""
+    def _plant_room(self) -> tuple:
+        """(what the stagnant pipes cool toward, where it comes from): read off the recording's
+        long standstills (pipe_sensor.plant_room), else the replayed house's storage.T_env."""
         from ..declaration import load
 
         room = pipe_sensor.plant_room(self.rec)
         if room is not None:
-            self._T_room_from = "recording (pipes after 6 h of standstill)"
-            return room
+            return room, "recording (pipes after 6 h of standstill)"
         inst = load(self.plant_name).instances.get("storage")
-        self._T_room_from = "house file (storage.T_env)"
-        return float(inst.params.T_env) if inst is not None and hasattr(inst.params, "T_env") \
-            else pipe_sensor.T_PLANT_ROOM_DEFAULT
+        if inst is not None and hasattr(inst.params, "T_env"):
+            return float(inst.params.T_env), "house file (storage.T_env)"
+        return pipe_sensor.T_PLANT_ROOM_DEFAULT, "default"
 
     def instances(self) -> set:
         """Instances a run's overrides may address: the replayed plant's, and the mixing
