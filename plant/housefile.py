@@ -3,6 +3,7 @@ the line of a table or key for messages."""
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from difflib import get_close_matches
 from pathlib import Path
 
@@ -48,20 +49,28 @@ def resolve(name_or_path: str | Path) -> Path:
 
 def line_of(text: str, section: str, key: str | None = None) -> int:
     """Line number of [section] (or of key inside it) in the TOML text; 0 when not found."""
-    lines = text.splitlines()
-    start = None
-    for i, line in enumerate(lines, 1):
-        if re.match(rf"^\s*\[{re.escape(section)}\]\s*(#.*)?$", line):
-            start = i
-            if key is None:
-                return i
+    start, keys = _line_index(text).get(section, (0, {}))
+    return start if key is None else keys.get(key, start)
+
+
+@lru_cache(maxsize=16)
+def _line_index(text: str) -> dict:
+    """{section: (line of its first header, {key: line of its first assignment in that table})}:
+    one pass over the text (a house is parsed again for every replay's overrides)."""
+    index, keys = {}, None
+    for i, line in enumerate(text.splitlines(), 1):
+        if re.match(r"^\s*\[", line):
+            m = re.match(r"^\s*\[([^\[\]]*)\]\s*(#.*)?$", line)
+            keys = None
+            if m and m.group(1) not in index:
+                keys = {}
+                index[m.group(1)] = (i, keys)
             continue
-        if start is not None:
-            if re.match(r"^\s*\[", line):
-                break
-            if re.match(rf"^\s*([\"']?){re.escape(key)}\1\s*=", line):
-                return i
-    return start or 0
+        if keys is not None:
+            m = re.match(r"""^\s*(?:"([^"]*)"|'([^']*)'|([^\s="']+))\s*=""", line)
+            if m:
+                keys.setdefault(next(g for g in m.groups() if g is not None), i)
+    return index
 
 
 def read(path: Path, _seen: tuple = ()) -> dict:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .base import Effect, Param, register
 
@@ -9,26 +10,25 @@ from .base import Effect, Param, register
 def first_order(t, y, tau):
     """First-order sensor lag tau dT_s/dt = T - T_s of a signal linear between its samples
     (exact discretisation, first-order hold): over a step dt with a = exp(-dt / tau) and
-    b = 1 - (tau / dt)(1 - a), y_s1 = a y_s0 + (1 - a - b) y0 + b y1. Holding each interval at its
-    end value instead (y_s1 = a y_s0 + (1 - a) y1) leads the continuous lag by about dt / 2: on
-    labsim's continuously lagged top sensor (60 s samples) it fitted 300 s as 348-368 s."""
+    b = 1 - (tau / dt)(1 - a), y_s1 = a y_s0 + (1 - a - b) y0 + b y1, starting at y0. Holding each
+    interval at its end value instead (y_s1 = a y_s0 + (1 - a) y1) leads the continuous lag by
+    about dt / 2: on labsim's continuously lagged top sensor (60 s samples) it fitted 300 s as
+    348-368 s."""
     if tau <= 0:
         return y
+    return _first_order(np.asarray(t, dtype=np.float64), np.asarray(y, dtype=np.float64), float(tau))
+
+
+@njit(cache=True)
+def _first_order(t, y, tau):
+    # compiled: a logger's jittered stamps give every step its own coefficients
     out = np.empty_like(y)
     out[0] = y[0]
-    dt = np.diff(t)
-    a = np.exp(-dt / tau)
-    b = 1.0 - (tau / dt) * (1.0 - a)
-    from scipy.signal import lfilter
-
-    if np.allclose(dt, dt[0]):
-        B, A = [b[0], 1.0 - a[0] - b[0]], [1.0, -a[0]]
-        # start in steady state at y[0]: the filter's state after an input y[0] held forever
-        z, _ = lfilter(B, A, y[1:], zi=[(1.0 - a[0] - b[0]) * y[0] + a[0] * y[0]])
-        out[1:] = z
-        return out
     for i in range(1, len(y)):
-        out[i] = a[i - 1] * out[i - 1] + (1.0 - a[i - 1] - b[i - 1]) * y[i - 1] + b[i - 1] * y[i]
+        dt = t[i] - t[i - 1]
+        a = np.exp(-dt / tau)
+        b = 1.0 - (tau / dt) * (1.0 - a) if dt > 0.0 else 1.0
+        out[i] = a * out[i - 1] + (1.0 - a - b) * y[i - 1] + b * y[i]
     return out
 
 
