@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, help="directory for the case directories")
     p.add_argument("--days", type=float, default=7.0)
     p.add_argument("--start", default="2021-01-10")
-    p.add_argument("--case", nargs="*", help="case names (default: all)")
+    p.add_argument("--case", nargs="+", action="extend", help="case names (default: all; repeatable)")
     p.add_argument("--list", action="store_true", help="list the cases and exit")
     a = p.parse_args(argv)
     if a.list or a.out is None:
