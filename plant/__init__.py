@@ -12,8 +12,11 @@ from pathlib import Path
 _HERE = Path(__file__).parent
 
 
-# the folders whose modules hold compiled kernels (or call them); others do not affect the cache
-_KERNEL_SOURCES = ("*.py", "components/*.py", "controllers/*.py", "hydraulics/*.py", "truth/*.py")
+# the folders whose modules hold compiled kernels (or call them); others do not affect the cache.
+# numba checks only the file of a cached function, not the kernels it calls: a plant compiled
+# against an older connection kernel (coupling_point.inlet) ran on after that kernel changed
+_KERNEL_SOURCES = ("*.py", "components/*.py", "connections/*.py", "controllers/*.py", "fmu/*.py",
+                   "hydraulics/*.py", "truth/*.py")
 
 
 def _source_hash() -> str:
