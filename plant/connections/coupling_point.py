@@ -82,7 +82,11 @@ class Kind(ComponentKind):
                 flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
         m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
         ports = c.storage_ports(st.name)
-        n_in = 1 + math.ceil(mix_layers - 1e-12) if mix_layers > 0.0 else 1
+        # a plume gets slots for the largest one allowed (half the tank), so a plume of any size
+        # runs in the same compiled plant: each slot count had been a plant of its own, about
+        # 10 s of compiling on a fresh machine for every plume size a diagnosis tried (most of
+        # the 22 plants one labsim case compiled); without a plume, the one port slot
+        n_in = 1 + math.ceil(0.5 * st.params.n_layers) if mix_layers > 0.0 else 1
         i0 = ports.add_inlet(inst, "storage_in", None, n_in)
         j = ports.add_outlet(inst, "storage_out", None)
         a = st.name
@@ -197,12 +201,12 @@ from numba import njit  # noqa: E402  (the kernel below is the point's own)
 def inlet(in_layer, in_m, in_T, mix_layers, n_layers, downward, port, m, T):
     """Spread an inflow over its port layer and mix_layers further layers into the tank (an
     inlet plume; the last one with the fractional weight), downward from the top port or upward
-    from the bottom port; in_layer has 1 + ceil(mix_layers) entries. mix_layers = 0: all of it
-    enters the port layer (bit-identical to a plain port)."""
-    n = in_layer.shape[0]
+    from the bottom port; in_layer has at least 1 + ceil(mix_layers) entries, the ones beyond
+    carry nothing. mix_layers = 0: all of it enters the port layer (bit-identical to a plain port)."""
+    n = 1 + int(math.ceil(mix_layers - 1e-12)) if mix_layers > 0.0 else 1
     w_last = mix_layers - (n - 2) if n > 1 else 1.0
     total = (n - 1) + w_last
-    for i in range(n):
+    for i in range(in_layer.shape[0]):
         in_layer[i] = min(port + i, n_layers - 1) if downward else max(port - i, 0)
         in_T[i] = T
-        in_m[i] = m * (w_last if i == n - 1 else 1.0) / total
+        in_m[i] = m * (w_last if i == n - 1 else 1.0) / total if i < n else 0.0
