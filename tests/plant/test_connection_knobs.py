@@ -26,6 +26,18 @@ def test_inlet_spreads_the_flow_with_a_fractional_last_layer():
     assert one[1][0] == 0.123  # no mixing: the whole flow, bit-identical
 
 
+def test_slots_beyond_the_plume_carry_nothing_and_every_plume_shares_one_compiled_plant():
+    exact = np.zeros(4, dtype=np.int64), np.zeros(4), np.zeros(4)
+    wide = np.zeros(21, dtype=np.int64), np.zeros(21), np.zeros(21)
+    for a in (exact, wide):
+        inlet(*a, 2.5, 40, True, 0, 0.35, 70.0)
+    assert np.array_equal(wide[1][:4], exact[1]) and np.all(wide[1][4:] == 0.0)
+    # a plume of any size runs in the plant compiled for the largest one (no compile per size)
+    modules = {load_house("house1", overrides={"switch.storage_inlet_mixing": v})._plant.module.__name__
+               for v in (0.03, 0.1, 0.137)}
+    assert len(modules) == 1, modules
+
+
 def test_inlet_mixing_degrades_stratification_and_keeps_the_balance():
     i_top, i_bot = CATALOGUE.index("storage.T_sensor_10"), CATALOGUE.index("storage.T_sensor_1")
     spread = {}
