@@ -3,8 +3,8 @@ the line of a table or key for messages."""
 from __future__ import annotations
 
 import re
-from functools import lru_cache
 from difflib import get_close_matches
+from functools import lru_cache
 from pathlib import Path
 
 try:

@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from . import pipe_sensor
 from .bounded import descent, from_u, scalar_search, to_u
 from .calibration import STORAGE_SCHEMES, file_scheme
 
@@ -243,11 +242,14 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
         if m.sum() < 10:
             continue
 
-        def fit_on(y0, m=m, j=j):
+        def fit_on(y0, m=m, j=j):  # y0: the signal's first len(y0) samples
+            n = len(y0)
+            mm, meas, tn = m[:n], ctx.meas[:n, j], t[:n]
+
             def f(v):
-                return float(np.mean((ctx.meas[m, j] - effect.apply(t, y0, [v])[m]) ** 2))
+                return float(np.mean((meas[mm] - effect.apply(tn, y0, [v])[mm]) ** 2))
             if effect.id == "sensor_offset":
-                v = float(np.clip(np.mean(ctx.meas[m, j] - y0[m]), p.lo, p.hi))
+                v = float(np.clip(np.mean(meas[mm] - y0[mm]), p.lo, p.hi))
                 return v, f(v), 1, f
             return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
 
@@ -261,17 +263,8 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
             # the re-fit tries takes the candidate's best value for it (one parameter over a
             # return: cheap), so the pair is fitted as one; alternating fits crept towards it
             # (labsim spring, a 600 s delay: 303, 395, 459, 501, 529, 546 s in six alternations)
-            flowing = np.nan_to_num(ctx.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING  # as refit_radiator
-
-            def joint(y, m=m & flowing & np.roll(flowing, 1), j=j):
-                n = len(y)
-                mm, meas = m[:n], ctx.meas[:n, j]
-
-                def g(v):
-                    return float(np.mean((meas[mm] - effect.apply(t[:n], y, [v])[mm]) ** 2))
-                v = float(np.clip(np.mean(meas[mm] - y[mm]), p.lo, p.hi)) if effect.id == "sensor_offset" \
-                    else scalar_search(g, p, n_grid=5, maxiter=8)[0]
-                return effect.apply(t[:n], y, [v])
+            def joint(y, m=m & replayer.circuit_flowing(settled=True), fit_on=fit_on):
+                return effect.apply(t[:len(y)], y, [fit_on(y, m)[0]])
 
             vals, N = replayer.refit_radiator(joint, ctx.train)
             y0 = replayer.radiator_return(vals, N)

@@ -241,12 +241,17 @@ class Replayer:
         self._checked = True
         return out
 
+    def circuit_flowing(self, settled: bool = False) -> np.ndarray:
+        """The samples at which the heating circuit flows (settled: and flowed the sample before,
+        so the radiator's return is its own and not the stagnant pipe's)."""
+        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
+        return flow & np.roll(flow, 1) if settled else flow
+
     def _circuit_training(self, train: np.ndarray, signal: str, what: str, keeps: str):
         """The training samples at which the circuit flows (and flowed the sample before) and
         `signal` is recorded -> (mask, None), or (None, the report entry saying why `what` is not
         calibrated: too few of them)."""
-        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
-        mask = train & flow & np.roll(flow, 1) & np.isfinite(self.rec.data[signal])
+        mask = train & self.circuit_flowing(settled=True) & np.isfinite(self.rec.data[signal])
         if mask.sum() >= MIN_CALIBRATION_SAMPLES:
             return mask, None
         why = (f"the heating circuit flows at {int(mask.sum())} recorded samples of the training window "
@@ -295,17 +300,15 @@ class Replayer:
         y = cut_mod.replay_radiator(self.rec, self.house_name, ov, len(self.t),
                                     elements or self.radiator_elements)["mixer.T_ret"]
         tau = self.pipe_tau.get("mixer.m_flow", pipe_sensor.AS_SIMULATED)
-        flowing = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
-        return pipe_sensor.cooled(self.t, y, flowing, tau, self._T_room)
+        return pipe_sensor.cooled(self.t, y, self.circuit_flowing(), tau, self._T_room)
 
     def refit_radiator(self, transform, mask: np.ndarray) -> tuple:
         """The radiator alone re-fitted with a sensor candidate's `transform` on its return
         (jointly, as the nominal re-fit is with a plant candidate): rating and water content, and
         the element count next to the calibrated one. -> (values, elements)."""
-        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
         start = {k: v for k, v in self.base.items() if k in cut_mod.RADIATOR_BOUNDS}
         near = [N for N in cut_mod.RADIATOR_ELEMENTS if abs(N - self.radiator_elements) <= 1]
-        fits = {N: cut_mod.fit_radiator(self.rec, self.house_name, mask & flow & np.roll(flow, 1), N, start,
+        fits = {N: cut_mod.fit_radiator(self.rec, self.house_name, mask & self.circuit_flowing(settled=True), N, start,
                                         transform) for N in near}
         N = min(fits, key=lambda q: fits[q][1])
         return fits[N][0], N
