@@ -9,6 +9,10 @@ held-out RMSE of the affected temperatures before and after where missing physic
 `RESULT correct=N total=M`, `RESULT sizes_within_20pct=N of=M`, `RESULT rmse_cut_ge_50pct=N of=M`.
 
     python benchmarks/diagnose_independent.py [CASE ...] [--days 7] [--jobs 2] [--keep DIR]
+                                              [--start 2021-01-10] [--seed N]
+
+--start and --seed make other realisations of the same cases (another week of weather and
+consumption, other sensor noise), to check that the verdicts do not hang on one recording.
 """
 import argparse
 import sys
@@ -60,6 +64,8 @@ def main():
     p.add_argument("--days", type=float, default=7.0)
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--keep", type=Path, help="keep the recordings (and reports) in this directory")
+    p.add_argument("--start", default="2021-01-10", help="first day of every recording")
+    p.add_argument("--seed", type=int, help="noise seed of every case (default: each case its own)")
     a = p.parse_args()
     cases = a.cases or list(CASES)
     rows = []
@@ -68,7 +74,7 @@ def main():
         root = a.keep or Path(tmp)
         for case in cases:
             d = root / case
-            meta = make_case(case, d, days=a.days)
+            meta = make_case(case, d, days=a.days, start=a.start, seed=a.seed)
             rec = recording_io.load(d, d / "columns.toml")
             t = time.perf_counter()
             rep = diagnose(rec, log=lambda *x: None, plots=False, jobs=a.jobs,

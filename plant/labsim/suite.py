@@ -1,6 +1,6 @@
 """The public suite of `twin diagnose` made by labsim: cases with known answers.
 
-    python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--list]
+    python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N] [--list]
 
 writes DIR/<case>/ (recording.csv, columns.toml, meta.json) per case; meta.json holds the truth:
 the case, its effects and sizes, and `expected`, the diagnosis outcomes counted as correct (an
@@ -88,6 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", type=Path, help="directory for the case directories")
     p.add_argument("--days", type=float, default=7.0)
     p.add_argument("--start", default="2021-01-10")
+    p.add_argument("--seed", type=int, help="noise seed of every case (default: each case its own)")
     p.add_argument("--case", nargs="+", action="extend", help="case names (default: all; repeatable)")
     p.add_argument("--list", action="store_true", help="list the cases and exit")
     a = p.parse_args(argv)
@@ -99,8 +100,9 @@ def main(argv: list[str] | None = None) -> int:
         if case not in CASES:
             print(f"unknown case {case!r}; --list shows them", file=sys.stderr)
             return 2
-        cmd = f"python -m plant.labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
-        m = make_case(case, a.out / case, a.days, a.start, command=cmd)
+        cmd = (f"python -m plant.labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
+               + (f" --seed {a.seed}" if a.seed is not None else ""))
+        m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd)
         print(f"{case:<24} {m['rows']} rows, closure {m['ledger_closure']:.1e}, "
               f"{m['generation_wall_s']:.1f} s  {m['effect_size']}", flush=True)
     return 0
