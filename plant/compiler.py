@@ -91,7 +91,11 @@ class Context:
         self.p0: list[np.ndarray] = []
         self.p_slices: dict[str, tuple[int, int]] = {}
         self.tabs: list[np.ndarray] = []
-        self.ia: list[np.ndarray] = []
+        # ia[0] and ia[1]: the bounds of every state and parameter slot, read at run time, so
+        # plants that differ only in the sizes of their arrays (a storage's layer count) share one
+        # generated source, hence one compiled plant per machine
+        self.ia: list[np.ndarray] = [np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)]
+        self._bounds: dict[str, list[int]] = {"x": [], "p": []}
         self.fa: list[np.ndarray] = []
         self.ledger: list[tuple[str, str, str]] = []  # (key, instance, category)
         self.ports: dict[str, StoragePorts] = {}
@@ -132,7 +136,11 @@ class Context:
         chunks.append(values)
         slices[key] = (a, a + len(values))
         view = f"{array}_{key}"
-        self.header.append(f"{view} = {array}[{a}:{a + len(values)}]")
+        bounds = self._bounds[array]
+        k, i = len(bounds), 0 if array == "x" else 1
+        bounds.extend((a, a + len(values)))
+        self.ia[i] = np.array(bounds, dtype=np.int64)
+        self.header.append(f"{view} = {array}[ia[{i}][{k}]:ia[{i}][{k + 1}]]")
         return view
 
     def table(self, array: np.ndarray) -> str:
@@ -341,7 +349,7 @@ def compile_plant(decl) -> CompiledPlant:
     x0 = np.concatenate(c.x0) if c.x0 else np.zeros(0)
     p = np.concatenate(c.p0) if c.p0 else np.zeros(0)
     tabs = tuple(c.tabs) if c.tabs else (np.zeros((1, 1)),)
-    ia = tuple(c.ia) if c.ia else (np.zeros(0, dtype=np.int64),)
+    ia = tuple(c.ia)
     fa = tuple(c.fa) if c.fa else (np.zeros(0),)
     return CompiledPlant(catalogue=catalogue, x0=x0, p=p, tabs=tabs, prof=decl.prof, ia=ia, fa=fa,
                          ledger=c.ledger, energy=c.energy, x_slices=c.x_slices,

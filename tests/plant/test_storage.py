@@ -279,3 +279,27 @@ def test_helpers_soc_sensors_port_layer():
     with pytest.raises(ConfigError, match="port height"):
         S.port_layer(2.0, P)
     assert S.layer_conductance(P) == pytest.approx(0.6 * (0.8 / 1.63) / (1.63 / 40))
+
+
+
+def test_layer_counts_share_one_compiled_plant_and_keep_their_own_states():
+    """The state and parameter slots are bounded at run time: a storage of 20, 40 or 80 layers
+    runs in one generated plant (one compile per machine, not one per layer count), and so does
+    a storage with an inlet plume; each has its own state and closes its energy balance over six
+    hours of running."""
+    from plant.house import load_house
+
+    houses = {n: load_house("house1", start="2021-01-10", overrides={"storage.n_layers": n, "storage.limiter": 0})
+              for n in (20, 40, 80)}
+    assert len({h._plant.module.__name__ for h in houses.values()}) == 1
+    plumes = {load_house("house1", overrides={"storage.n_layers": n, "switch.storage_inlet_mixing": 0.05})
+              ._plant.module.__name__ for n in (20, 40, 80)}
+    assert len(plumes) == 1 and plumes.isdisjoint({h._plant.module.__name__ for h in houses.values()})
+    for n, h in houses.items():
+        assert h.state("storage").shape == (n,)
+        for _ in range(6 * 60):
+            h.step(60.0)
+        L = h.ledger()
+        assert L["fuel"] > 0.0 and L["closure"] < 1e-9, (n, L["closure"])
+        T = h.state("storage")
+        assert np.all(np.isfinite(T)) and np.ptp(T) > 1.0   # still stratified, top to bottom
