@@ -44,6 +44,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     nref = {"parameters": [], "params": []}
     if refit_nominal:
         nref = calibration.refit_nominal(ctx, rp, house)
+        ctx.nominal_ranges = calibration.ranges(nref)
         nominal_rows = rp.run()
         nref["train_cost_file"] = ctx.cost(sim_file, ctx.train)
         nref["heldout_cost_file"] = ctx.cost(sim_file, ctx.held)

@@ -179,6 +179,17 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
             "identifiability": ident, "storage_scheme": scheme}
 
 
+def ranges(nref, refit=NOMINAL_REFIT) -> dict:
+    """override key -> (lo, hi): the values the nominal re-fit could take (a pair of headers: both
+    keys), from refit_nominal's report entry."""
+    also = {q.key: q.also for q in refit}
+    out = {}
+    for row in nref.get("parameters", []):
+        for k in (row["name"], *also.get(row["name"], ())):
+            out[k] = (float(row["bounds"][0]), float(row["bounds"][1]))
+    return out
+
+
 def file_scheme(replayer) -> dict:
     """The storage scheme keys at the house file's values (to undo a chosen scheme in a run)."""
     from ..declaration import load

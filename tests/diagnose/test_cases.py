@@ -8,7 +8,7 @@ benchmarks/diagnose_cases.py.
 """
 import pytest
 
-from plant.diagnose import calibration, diagnose, recording_io, synth
+from plant.diagnose import calibration, diagnose, fit, recording_io, synth, verdict
 from plant.diagnose.effects import Effect, Param, catalogue, register, REGISTRY
 from plant.truth.recording import make_recording
 
@@ -220,3 +220,29 @@ def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(t
     assert rep["verdict"] == "missing_physics" and rep["effect"] == "heat_loss"
     best = next(c for c in rep["candidates"] if c["id"] == "heat_loss")
     assert best["heldout_cost"] < 0.5 * nr["heldout_cost_refit"]
+
+
+def test_a_candidate_within_the_nominal_refit_range_is_a_calibration_not_missing_physics():
+    """A heat loss the nominal re-fit could have given itself (17-23 W/K around the file's 20) is
+    not named: its held-out gain is the drift of a calibrated value between the two windows. Both
+    headers of a pair carry the re-fit's range; a value beyond the range is judged as before."""
+    from types import SimpleNamespace
+
+    nref = {"parameters": [{"name": "storage.UA_loss", "bounds": [17.0, 23.0]},
+                           {"name": "supply_header.UA_loss", "bounds": [0.0, 3.0]}]}
+    ranges = calibration.ranges(nref)
+    assert ranges == {"storage.UA_loss": (17.0, 23.0), "supply_header.UA_loss": (0.0, 3.0),
+                      "return_header.UA_loss": (0.0, 3.0)}
+    ctx = SimpleNamespace(nominal_ranges=ranges)
+    effect = {e.id: e for e in catalogue()}
+    heat = fit.Result("heat_loss", "storage", "simulate", True, theta=[20.2], effect=effect["heat_loss"])
+    assert verdict.within_calibration(heat, ctx) == "storage.UA_loss = 20.2 within 17 … 23"
+    heat.theta = [45.0]
+    assert verdict.within_calibration(heat, ctx) == ""
+    pipes = fit.Result("pipe_heat_loss", "switch", "simulate", True, theta=[2.0], effect=effect["pipe_heat_loss"])
+    assert "return_header.UA_loss = 2 within 0 … 3" in verdict.within_calibration(pipes, ctx)
+    pipes.theta = [8.0]
+    assert verdict.within_calibration(pipes, ctx) == ""
+    plume = fit.Result("storage_mixing", "storage", "simulate", True, theta=[0.12], effect=effect["storage_mixing"])
+    assert verdict.within_calibration(plume, ctx) == ""        # no re-fit range given for the plume here
+
