@@ -10,12 +10,14 @@ A run directory (`twin serve --record DIR`), written by Recorder as the run goes
 Both CSV files are flushed by a timer thread at least every second of wall time, so a crash
 loses at most the last second and a reader sees the rows written so far while the run goes on.
 
-A user's CSV (or CSV.gz): a `time` column in seconds since the recording start plus user
-columns, read through a columns file (TOML):
+A user's CSV (or CSV.gz): a `time` column in seconds since the recording start (or ISO 8601
+date-times) plus user columns, read through a columns file (TOML):
 
     [recording]
     start = "2021-01-10"            # date (or YYYY-MM-DDTHH:MM) of time = 0, local standard time
+                                    # (date-time stamps without it: the earliest stamp)
     file = "recording.csv"          # optional: the CSV beside the columns file
+    time = "Timestamp"              # optional: the time column's name (default "time")
     [columns]
     "TS_CHP_out" = "chp.T_sup"      # user column -> catalogue signal
     [units]
@@ -181,16 +183,58 @@ def read_recording(path: str | Path, columns: str | Path | None = None) -> Recor
     f = p / doc.get("recording", {}).get("file", "recording.csv") if p.is_dir() else p
     if not f.exists():
         raise ConfigError(f"{columns}: [recording] file = {f.name!r}: no such file beside it")
-    header, data, dropped = _read_csv(f)
-    if "time" not in header:
-        raise DataError(f"{f}: needs a 'time' column in seconds; columns are: {', '.join(header[:12])}")
-    i = header.index("time")
-    names = [h for h in header if h != "time"]
+    tcol = str(doc.get("recording", {}).get("time", "time"))
+    header, data, dropped, cells = _read_csv(f, text_column=tcol)
+    if tcol not in header:
+        from difflib import get_close_matches
+
+        close = get_close_matches(tcol, header, n=3, cutoff=0.5)
+        raise DataError(f"{f}: needs a {tcol!r} column (seconds since [recording] start, or ISO date-times"
+                        + ("; another name: [recording] time = \"column\" in the columns file" if tcol == "time" else "")
+                        + ")" + (f"; did you mean {', '.join(close)}?" if close else "")
+                        + f" Columns are: {', '.join(header[:12])}{' ...' if len(header) > 12 else ''}")
+    i = header.index(tcol)
+    names = [h for h in header if h != tcol]
     values = np.delete(data, i, axis=1)
     signals, units, columns_meta = _column_entries(doc, columns) if doc else ({n: n for n in names}, {}, {})
     start = doc.get("recording", {}).get("start")
-    return Recording(p, names, data[:, i], values, None if start is None else str(start), signals,
-                     units, {"columns": columns_meta}, [], dropped)
+    time, start = _times(cells, None if start is None else str(start), f"{f}: column {tcol!r}")
+    return Recording(p, names, time, values, start, signals, units, {"columns": columns_meta}, [], dropped)
+
+
+def _times(cells: list[str], start: str | None, where: str) -> tuple[np.ndarray, str | None]:
+    """The time column: seconds since the start, or ISO 8601 date-times (2021-01-10 00:01:00,
+    2021-01-10T00:01:00+01:00) turned into seconds since [recording] start (read in the earliest
+    stamp's UTC offset when it has none), else since the earliest stamp, which then is the start.
+    Unreadable cells are NaN (their rows are dropped by the caller, with a warning)."""
+    seconds = np.array([_number(c) for c in cells], dtype=float)
+    if np.isfinite(seconds).any() or not any(c.strip() for c in cells):
+        return seconds, start
+    from datetime import datetime
+
+    stamps = []
+    for c in cells:
+        try:
+            stamps.append(datetime.fromisoformat(c.strip()))
+        except ValueError:
+            stamps.append(None)
+    ok = [d for d in stamps if d is not None]
+    if not ok:
+        raise DataError(f"{where}: neither seconds nor ISO date-times (e.g. 2021-01-10T00:01:00); "
+                        f"first cell {cells[0]!r}")
+    if len({d.tzinfo is None for d in ok}) > 1:
+        raise DataError(f"{where}: mixes date-times with and without a UTC offset; give all or none")
+    if start is None:
+        t0 = min(ok)
+        start = t0.replace(tzinfo=None).isoformat(timespec="seconds")
+    else:
+        try:
+            t0 = datetime.fromisoformat(start)
+        except ValueError:
+            raise DataError(f"{where}: [recording] start = {start!r} is not an ISO date or date-time") from None
+        if t0.tzinfo is None and ok[0].tzinfo is not None:
+            t0 = t0.replace(tzinfo=min(ok).tzinfo)  # a start without an offset: the earliest stamp's
+    return np.array([(d - t0).total_seconds() if d is not None else np.nan for d in stamps]), start
 
 
 COLUMN_KEYS = ("signal", "unit", "scale", "offset", "range", "height")
@@ -263,7 +307,7 @@ def _read_run(d: Path) -> Recording:
             raise ConfigError(f"{d}: not a recording directory ({f} missing); give a `twin serve "
                               f"--record` directory, a CSV, or a directory with {COLUMNS_FILE}")
     meta = json.loads((d / "meta.json").read_text())
-    header, data, dropped = _read_csv(d / "signals.csv")
+    header, data, dropped, _ = _read_csv(d / "signals.csv")
     with open(d / "events.csv", newline="") as fh:
         events = list(csv.DictReader(fh))
     names = header[1:]
@@ -293,8 +337,9 @@ def _open(path: Path):
     return gzip.open(path, "rt", newline="") if path.suffix == ".gz" else open(path, newline="")
 
 
-def _read_csv(path: Path) -> tuple[list[str], np.ndarray, int]:
-    """(header, rows x columns as float with NaN for unreadable cells, rows dropped)."""
+def _read_csv(path: Path, text_column: str | None = None) -> tuple[list[str], np.ndarray, int, list | None]:
+    """(header, rows x columns as float with NaN for unreadable cells, rows dropped, the cells of
+    text_column as written (None: no such column); that column's floats are NaN)."""
     with _open(path) as fh:
         rows = list(csv.reader(fh))
     if not rows:
@@ -303,13 +348,18 @@ def _read_csv(path: Path) -> tuple[list[str], np.ndarray, int]:
     n = len(header)
     body = [r for r in rows[1:] if r and any(c.strip() for c in r)]
     kept = [r for r in body if len(r) == n]
+    cells = None
+    if text_column in header:
+        j = header.index(text_column)
+        cells = [r[j] for r in kept]
+        kept = [r[:j] + ["nan"] + r[j + 1:] for r in kept]
     if not kept:
-        return header, np.zeros((0, n)), len(body)
+        return header, np.zeros((0, n)), len(body), cells
     try:
         data = np.array(kept, dtype=float)
     except ValueError:  # empty or non-numeric cells: NaN, cell by cell
         data = np.array([[_number(c) for c in r] for r in kept], dtype=float)
-    return header, data, len(body) - len(kept)
+    return header, data, len(body) - len(kept), cells
 
 
 def _number(cell: str) -> float:

@@ -164,3 +164,32 @@ def test_a_recording_too_short_for_a_held_out_window_says_so():
     short = synth.make("none", days=0.2, noise=False)  # 4.8 h: no room for 1 + 2 + 3 h
     with pytest.raises(DataError, match=r"spans 4\.8 h: too short for a training and a held-out window"):
         diagnose(short, train_days=0.1, log=lambda *a: None, plots=False)
+
+
+def test_the_shipped_recording_with_date_time_stamps_reads_as_with_seconds(tmp_path):
+    """The same lab export with its time column as local date-times under another name gives the
+    same samples (the stamps' start is the mapping's), and an unreadable stamp drops its row
+    with a warning."""
+    from datetime import datetime, timedelta
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "profiles" / "recordings" / "concealed_idle_flow"
+    lines = (src / "recording.csv").read_text().splitlines()
+    t0 = datetime(2021, 1, 10)
+    out = ["Stamp" + lines[0][len("time"):]]
+    for k, line in enumerate(lines[1:]):
+        t, rest = line.split(",", 1)
+        stamp = (t0 + timedelta(seconds=float(t))).isoformat(sep=" ", timespec="milliseconds")
+        out.append(f"{'not a time' if k == 5 else stamp},{rest}")
+    (tmp_path / "recording.csv").write_text("\n".join(out) + "\n")
+    cols = (src / "columns.toml").read_text().replace('file = "recording.csv"', 'file = "recording.csv"\ntime = "Stamp"')
+    (tmp_path / "columns.toml").write_text(cols)
+    a = recording_io.load(src, src / "columns.toml")
+    b = recording_io.load(tmp_path, tmp_path / "columns.toml")
+    assert b.start == a.start == "2021-01-10"
+    assert any("1 row(s) without a valid time dropped" in w for w in b.warnings)
+    keep = np.ones(len(a.time), bool)
+    keep[5] = False
+    np.testing.assert_allclose(b.time, a.time[keep], atol=1e-3)
+    for s in a.data:
+        np.testing.assert_array_equal(b.data[s], a.data[s][keep])

@@ -100,3 +100,41 @@ def test_errors_name_the_file_and_what_to_give(tmp_path):
     cols.write_text("[units]\n")
     with pytest.raises(ConfigError, match=r"needs a \[columns\] table"):
         read_recording(bad, cols)
+
+
+def test_a_time_column_of_iso_date_times_under_its_own_name(tmp_path):
+    """A DAQ export with stamps instead of seconds: `[recording] time` names the column; the
+    stamps become seconds since [recording] start, or since the earliest stamp (then the start);
+    stamps with a UTC offset keep their own offset; an unreadable stamp is NaN (dropped later)."""
+    (tmp_path / "lab.csv").write_text("Timestamp,TS_top\n2021-01-11 00:01:00,60\n2021-01-11T00:02:30,61\n"
+                                      "garbage,62\n2021-01-11 00:03:00,63\n")
+    cols = tmp_path / "columns.toml"
+    cols.write_text('[recording]\nstart = "2021-01-11"\ntime = "Timestamp"\n[columns]\n"TS_top" = "storage.T_top"\n')
+    back = read_recording(tmp_path / "lab.csv", cols)
+    assert back.names == ["TS_top"] and back.start == "2021-01-11"
+    np.testing.assert_array_equal(back.time[[0, 1, 3]], [60.0, 150.0, 180.0])
+    assert np.isnan(back.time[2]) and back.values[3, 0] == 63.0
+    cols.write_text('[recording]\ntime = "Timestamp"\n[columns]\n"TS_top" = "storage.T_top"\n')
+    back = read_recording(tmp_path / "lab.csv", cols)
+    assert back.start == "2021-01-11T00:01:00"
+    np.testing.assert_array_equal(back.time[[0, 1, 3]], [0.0, 90.0, 120.0])
+    # a logger that switched its offset: each stamp counts in its own; the start in the earliest's
+    (tmp_path / "utc.csv").write_text("Timestamp,TS_top\n2021-01-11T00:01:00+01:00,60\n2021-01-11T00:02:00+00:00,61\n")
+    cols.write_text('[recording]\nstart = "2021-01-11"\ntime = "Timestamp"\n[columns]\n"TS_top" = "storage.T_top"\n')
+    np.testing.assert_array_equal(read_recording(tmp_path / "utc.csv", cols).time, [60.0, 3720.0])
+
+
+def test_a_missing_or_unreadable_time_column_is_named(tmp_path):
+    (tmp_path / "lab.csv").write_text("Zeitstempel,TS_top\n2021-01-11 00:01:00,60\n")
+    with pytest.raises(DataError, match=r"needs a 'time' column .*\[recording\] time = .*Columns are: Zeitstempel"):
+        read_recording(tmp_path / "lab.csv")
+    cols = tmp_path / "columns.toml"
+    cols.write_text('[recording]\ntime = "Zeitstempl"\n[columns]\n"TS_top" = "storage.T_top"\n')
+    with pytest.raises(DataError, match="needs a 'Zeitstempl' column .*did you mean Zeitstempel"):
+        read_recording(tmp_path / "lab.csv", cols)
+    (tmp_path / "words.csv").write_text("time,TS_top\nmonday,60\ntuesday,61\n")
+    with pytest.raises(DataError, match="neither seconds nor ISO date-times .*first cell 'monday'"):
+        read_recording(tmp_path / "words.csv")
+    (tmp_path / "mixed.csv").write_text("time,TS_top\n2021-01-11T00:01:00,60\n2021-01-11T00:02:00+01:00,61\n")
+    with pytest.raises(DataError, match="with and without a UTC offset"):
+        read_recording(tmp_path / "mixed.csv")
