@@ -2,7 +2,8 @@
 
 Any recording profiles.recording.read_recording reads: a run directory (signals.csv, events.csv,
 meta.json: columns are catalogue names in catalogue units, meta.json holds the start), a CSV with
-a `time` column [s] through a columns file ([recording] start, [columns] "user column" =
+a `time` column [s] (or ISO date-times; [recording] time names another column) through a columns
+file ([recording] start, [columns] "user column" =
 "catalogue signal", [units] "user column" = unit of plant/units.py), a directory holding
 columns.toml (`twin make-recording`), or a CSV whose columns are catalogue names.
 
