@@ -17,6 +17,7 @@ from plant.errors import TwinError
 from plant.grid.network import Draw, Grid
 
 from . import engine
+from .launch import follow_launcher
 
 
 def columns(grid: Grid) -> list[str]:
@@ -114,6 +115,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))
+    follow_launcher()
     try:
         result = run(load_district(a.district), a.broker, a.out, a.days, not a.no_progress, a.interface)
     except TwinError as exc:

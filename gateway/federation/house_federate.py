@@ -24,6 +24,7 @@ from plant.errors import TwinError
 from plant.water import CP
 
 from . import engine
+from .launch import follow_launcher
 
 METERS = ("substation.M_extracted", "substation.E_extracted", "substation.M_fed_in", "substation.E_fed_in")
 
@@ -129,6 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--interface", help="this host's address as the broker reaches it (other hosts)")
     a = p.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # finally-blocks close the recording
+    follow_launcher()
     try:
         run(load_district(a.district), a.house, a.broker, a.out, a.days, a.serve, a.speed, a.host,
             interface=a.interface)

@@ -25,6 +25,7 @@ from plant.errors import TwinError
 from . import engine
 
 STOP_GRACE = 5.0  # s between SIGTERM and SIGKILL
+LAUNCHER_PID = "TWIN_LAUNCHER_PID"  # set in a federate's environment by the launcher that started it
 
 
 class DistrictFailed(TwinError):
@@ -82,7 +83,7 @@ def launch(district, out: Path, days: float, *, serve: bool = False, speed: floa
     procs: dict[str, subprocess.Popen] = {}
     logs = out / "logs"
     logs.mkdir(exist_ok=True)
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", LAUNCHER_PID: str(os.getpid())}
     failed = None
     try:
         for m in mine:
@@ -115,6 +116,29 @@ def launch(district, out: Path, days: float, *, serve: bool = False, speed: floa
                              f"the other federates were stopped; recordings in {out} are readable up to "
                              f"their last step" + (f"\n--- {log} (end) ---\n{tail}" if tail else ""))
     return summarize(district, out) if only is None else {"members": mine}
+
+
+def follow_launcher(grace: float = 3.0) -> None:
+    """In a federate: leave when the launcher that started it dies, even by SIGKILL (its finally
+    stops nobody then). A daemon thread watches the parent process: when it is gone, SIGTERM
+    (the federate closes its recording in its finally-blocks), and `grace` s later an immediate
+    exit, for a federate blocked in an engine call whose broker died with the launcher (the
+    recording is flushed at least every second). Measured before: three federates were still
+    running 30 s after their launcher was killed. A federate started by hand (no LAUNCHER_PID)
+    is left alone."""
+    pid = os.environ.get(LAUNCHER_PID)
+    if not pid or not pid.isdigit():
+        return
+    import threading
+
+    def watch(parent=int(pid)):
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(grace)
+        os._exit(143)
+
+    threading.Thread(target=watch, name="follow-launcher", daemon=True).start()
 
 
 def _wait(procs: dict[str, subprocess.Popen], seconds: float) -> bool:

@@ -145,6 +145,33 @@ def test_a_killed_house_is_named_the_others_stop_and_every_recording_reads(tmp_p
         assert rec.time[-1] < 7 * 86400
 
 
+def test_a_killed_launcher_leaves_no_federate_behind_and_every_recording_reads(tmp_path):
+    """SIGKILL to the launcher alone (no finally of its runs): its federates see their parent gone
+    and leave within a few seconds (launch.follow_launcher); before, all three were still running
+    30 s later. What they recorded reads up to their last flushed step."""
+    path = district_file(tmp_path, {"house1": "rules", "house2": "rules"})
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "gateway.cli.main", "district", "run", path, "--days", "7", "--out", str(out)]
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    f = out / "house2" / "signals.csv"
+    deadline = time.monotonic() + 300     # generous: a cold plant cache on a busy 2-core machine
+    while time.monotonic() < deadline and p.poll() is None and not (f.exists() and f.read_text().count("\n") > 50):
+        time.sleep(0.2)
+    assert p.poll() is None and f.exists(), "the district never reached 50 rows of house2"
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait()
+    t_kill = time.monotonic()
+    while _pids(f"federate.*{out}") and time.monotonic() - t_kill < 15.0:
+        time.sleep(0.2)
+    left = _pids(f"federate.*{out}")
+    for pid in left:                      # not to leave them to the next test
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"federates left running 15 s after their launcher was killed: {left}"
+    for member in ("house1", "house2", "grid"):
+        rec = read_recording(out / member)
+        assert len(rec.time) > 50 and np.all(np.diff(rec.time) > 0) and rec.dropped_rows == 0
+
+
 def test_two_hosts_share_a_district_through_the_broker_address_only(tmp_path):
     """Host A runs the broker, the grid and house1; host B (another process, knowing only the
     broker's address) runs house2."""
