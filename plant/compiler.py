@@ -95,7 +95,6 @@ class Context:
         # plants that differ only in the sizes of their arrays (a storage's layer count) share one
         # generated source, hence one compiled plant per machine
         self.ia: list[np.ndarray] = [np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)]
-        self._bounds: dict[str, list[int]] = {"x": [], "p": []}
         self.fa: list[np.ndarray] = []
         self.ledger: list[tuple[str, str, str]] = []  # (key, instance, category)
         self.ports: dict[str, StoragePorts] = {}
@@ -134,12 +133,9 @@ class Context:
         a = sum(len(v) for v in chunks)
         values = np.ascontiguousarray(values, dtype=np.float64)
         chunks.append(values)
+        k, i = 2 * len(slices), 0 if array == "x" else 1  # ia[i] = the slices' bounds in order (compile_plant)
         slices[key] = (a, a + len(values))
         view = f"{array}_{key}"
-        bounds = self._bounds[array]
-        k, i = len(bounds), 0 if array == "x" else 1
-        bounds.extend((a, a + len(values)))
-        self.ia[i] = np.array(bounds, dtype=np.int64)
         self.header.append(f"{view} = {array}[ia[{i}][{k}]:ia[{i}][{k + 1}]]")
         return view
 
@@ -349,6 +345,8 @@ def compile_plant(decl) -> CompiledPlant:
     x0 = np.concatenate(c.x0) if c.x0 else np.zeros(0)
     p = np.concatenate(c.p0) if c.p0 else np.zeros(0)
     tabs = tuple(c.tabs) if c.tabs else (np.zeros((1, 1)),)
+    c.ia[0], c.ia[1] = (np.array([b for ab in sl.values() for b in ab], dtype=np.int64)
+                        for sl in (c.x_slices, c.p_slices))
     ia = tuple(c.ia)
     fa = tuple(c.fa) if c.fa else (np.zeros(0),)
     return CompiledPlant(catalogue=catalogue, x0=x0, p=p, tabs=tabs, prof=decl.prof, ia=ia, fa=fa,

@@ -18,7 +18,7 @@ HOUSES = Path(__file__).parent / "houses"
 # the CoSES laboratory's names of the five houses (reference §12), accepted wherever a house is named
 ALIASES = {"SF1": "house1", "SF2": "house2", "SF3": "house3", "SF4": "house4", "MF5": "house5"}
 #: TOML files beside the house files that are not houses: <house>_sil.toml, the SiL signal list of
-#: reference §13.1 as a columns file (profiles/recording.py)
+#: reference §13.1 as a columns file (profiles/columns.py)
 NOT_HOUSES = ("_sil",)
 
 

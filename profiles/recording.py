@@ -11,17 +11,8 @@ Both CSV files are flushed by a timer thread at least every second of wall time,
 loses at most the last second and a reader sees the rows written so far while the run goes on.
 
 A user's CSV (or CSV.gz): a `time` column in seconds since the recording start (or ISO 8601
-date-times) plus user columns, read through a columns file (TOML):
-
-    [recording]
-    start = "2021-01-10"            # date (or YYYY-MM-DDTHH:MM) of time = 0, local standard time
-                                    # (date-time stamps without it: the earliest stamp)
-    file = "recording.csv"          # optional: the CSV beside the columns file
-    time = "Timestamp"              # optional: the time column's name (default "time")
-    [columns]
-    "TS_CHP_out" = "chp.T_sup"      # user column -> catalogue signal
-    [units]
-    "TS_CHP_out" = "degC"           # the column's unit (plant/units.py); default: the signal's
+date-times) plus user columns, read through a columns file (profiles/columns.py: [recording]
+start, file and time, [columns] user column -> signal, [units]).
 
 A directory holding columns.toml (and the CSV it names) is read the same way: that is the
 format of `twin make-recording` (profiles/recordings/). Without a columns file each column is
@@ -45,7 +36,6 @@ import json
 import platform
 import threading
 import time
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -54,11 +44,12 @@ import numpy as np
 
 from plant.errors import ConfigError, DataError
 
+from .columns import COLUMNS_FILE, column_entries, read_columns
+
 FORMAT = "house-twin recording 1"
 EVENT_COLUMNS = ("t", "kind", "transport", "client", "device", "point", "value", "accepted",
                  "reason", "detail")
 RUN_FILES = ("signals.csv", "events.csv", "meta.json")
-COLUMNS_FILE = "columns.toml"
 
 
 class Recorder:
@@ -196,7 +187,7 @@ def read_recording(path: str | Path, columns: str | Path | None = None) -> Recor
     i = header.index(tcol)
     names = [h for h in header if h != tcol]
     values = np.delete(data, i, axis=1)
-    signals, units, columns_meta = _column_entries(doc, columns) if doc else ({n: n for n in names}, {}, {})
+    signals, units, columns_meta = column_entries(doc, columns) if doc else ({n: n for n in names}, {}, {})
     start = doc.get("recording", {}).get("start")
     time, start = _times(cells, None if start is None else str(start), f"{f}: column {tcol!r}")
     return Recording(p, names, time, values, start, signals, units, {"columns": columns_meta}, [], dropped)
@@ -207,7 +198,10 @@ def _times(cells: list[str], start: str | None, where: str) -> tuple[np.ndarray,
     2021-01-10T00:01:00+01:00) turned into seconds since [recording] start (read in the earliest
     stamp's UTC offset when it has none), else since the earliest stamp, which then is the start.
     Unreadable cells are NaN (their rows are dropped by the caller, with a warning)."""
-    seconds = np.array([_number(c) for c in cells], dtype=float)
+    try:
+        seconds = np.array(cells, dtype=float)
+    except ValueError:  # blank or non-numeric cells (date-times): cell by cell
+        seconds = np.array([_number(c) for c in cells], dtype=float)
     if np.isfinite(seconds).any() or not any(c.strip() for c in cells):
         return seconds, start
     from datetime import datetime
@@ -237,70 +231,6 @@ def _times(cells: list[str], start: str | None, where: str) -> tuple[np.ndarray,
     return np.array([(d - t0).total_seconds() if d is not None else np.nan for d in stamps]), start
 
 
-COLUMN_KEYS = ("signal", "unit", "scale", "offset", "range", "height")
-
-
-def _column_entries(doc: dict, path) -> tuple[dict, dict, dict]:
-    """[columns] entries: "col" = "signal" or { signal, unit, scale, offset, range, height };
-    returns (column -> signal, column -> unit, column -> {scale, offset, range, height}).
-
-    scale/offset: value x scale + offset, in `unit`; range = [a, b, c, d]: the column's a ... b
-    maps linearly onto c ... d of the signal's own unit (e.g. a boiler command logged as
-    0 ... 100 % onto 0 ... 10 V); height: a storage sensor's relative height 0 (bottom) ... 1 (top)."""
-    signals, units, extra, problems = {}, {}, {}, []
-    units.update({str(c): str(u) for c, u in doc.get("units", {}).items()})
-    for col, entry in doc["columns"].items():
-        col = str(col)
-        where = f"{path}: [columns] {col!r}"
-        if isinstance(entry, str):
-            signals[col] = entry
-            continue
-        if not isinstance(entry, dict) or not isinstance(entry.get("signal"), str):
-            problems.append(f"{where} = {entry!r}: expected \"signal.name\" or {{ signal = \"...\", unit = ..., "
-                            "scale = ..., offset = ..., range = [a, b, c, d], height = 0 ... 1 }")
-            continue
-        for key in entry:
-            if key not in COLUMN_KEYS:
-                from difflib import get_close_matches
-
-                close = get_close_matches(key, COLUMN_KEYS, n=2)
-                problems.append(f"{where} {key}: unknown key; " + (f"did you mean {', '.join(close)}?" if close
-                                                                  else f"allowed: {', '.join(COLUMN_KEYS)}"))
-        signals[col] = entry["signal"]
-        if "unit" in entry:
-            units[col] = str(entry["unit"])
-        t = {}
-        for key in ("scale", "offset"):
-            if key in entry:
-                v = entry[key]
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or (key == "scale" and v == 0):
-                    problems.append(f"{where} {key} = {v!r}: must be a number" + (" other than 0" if key == "scale" else ""))
-                else:
-                    t[key] = float(v)
-        if "range" in entry:
-            r = entry["range"]
-            if (not isinstance(r, list) or len(r) != 4 or any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in r)
-                    or r[0] == r[1]):
-                problems.append(f"{where} range = {r!r}: must be [a, b, c, d] with a != b: the column's a ... b "
-                                "onto c ... d of the signal, e.g. [0, 100, 0, 10] for 0-100 % onto 0-10 V")
-            elif "unit" in entry or "scale" in entry or "offset" in entry:
-                problems.append(f"{where}: range maps straight onto the signal's unit; leave out unit, scale and offset")
-            else:
-                t["range"] = [float(v) for v in r]
-        if "height" in entry:
-            h = entry["height"]
-            if isinstance(h, bool) or not isinstance(h, (int, float)) or not 0.0 <= h <= 1.0:
-                problems.append(f"{where} height = {h!r}: outside 0 … 1 (relative height of the sensor in its "
-                                "storage: 0 = bottom, 1 = top)")
-            else:
-                t["height"] = float(h)
-        if t:
-            extra[col] = t
-    if problems:
-        raise ConfigError("\n".join(problems))
-    return signals, units, extra
-
-
 def _read_run(d: Path) -> Recording:
     for f in RUN_FILES:
         if not (d / f).exists():
@@ -314,23 +244,6 @@ def _read_run(d: Path) -> Recording:
     units = meta.get("units", {})
     return Recording(d, names, data[:, 0], data[:, 1:], meta.get("start"), {n: n for n in names},
                      units, meta, events, dropped)
-
-
-def read_columns(path: str | Path) -> dict:
-    """The columns file as a dict, its shape checked ([columns] a table of strings)."""
-    p = Path(path)
-    if not p.exists():
-        raise ConfigError(f"{p}: no such columns file")
-    try:
-        doc = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{p}: not valid TOML: {exc}") from None
-    if "columns" not in doc or not isinstance(doc["columns"], dict):
-        raise ConfigError(f"{p}: needs a [columns] table: \"user column\" = \"signal.name\" (or a table "
-                          "{ signal = ..., unit = ..., scale = ..., offset = ..., range = [...], height = ... })")
-    if not isinstance(doc.get("units", {}), dict) or not isinstance(doc.get("recording", {}), dict):
-        raise ConfigError(f"{p}: [units] and [recording] must be tables")
-    return doc
 
 
 def _open(path: Path):
@@ -390,16 +303,4 @@ def write_csv(path: str | Path, time: np.ndarray, data: dict[str, np.ndarray],
     return path
 
 
-def write_columns(path: str | Path, signals: dict[str, str], units: dict[str, str],
-                  start: str | None = None, file: str | None = None, comment: str | None = None) -> None:
-    """Write a columns file: [recording] start (and file), [columns] and [units] per column."""
-    lines = [f"# {comment}"] if comment else []
-    lines += ["[recording]", f'start = "{start or "2021-01-10"}"']
-    lines += [f'file = "{file}"'] if file else []
-    lines += ["", "[columns]"] + [f'"{c}" = "{s}"' for c, s in signals.items()]
-    lines += ["", "[units]"] + [f'"{c}" = "{u}"' for c, u in units.items()]
-    Path(path).write_text("\n".join(lines) + "\n")
-
-
-__all__ = ["Recorder", "Recording", "read_recording", "read_columns", "write_csv", "write_columns",
-           "EVENT_COLUMNS", "FORMAT"]
+__all__ = ["Recorder", "Recording", "read_recording", "write_csv", "EVENT_COLUMNS", "FORMAT"]

@@ -88,12 +88,10 @@ class Kind(ComponentKind):
                 flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
         m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
         ports = c.storage_ports(st.name)
-        # a plume gets slots for the largest one allowed (half the tank), so a plume of any size
-        # runs in the same compiled plant: each slot count had been a plant of its own, about
-        # 10 s of compiling on a fresh machine for every plume size a diagnosis tried (most of
-        # the 22 plants one labsim case compiled); at least PLUME_SLOTS, so that tanks of up to
-        # 80 layers share that plant too (state bounds are run-time values, compiler.py); without
-        # a plume, the one port slot
+        # a plume gets slots for the largest one allowed (half the tank), at least PLUME_SLOTS, so
+        # a plume of any size in a tank of up to 80 layers runs in one compiled plant: each slot
+        # count had been a plant of its own, about 10 s of compiling on a fresh machine for every
+        # plume size and layer count a diagnosis tried; without a plume, the one port slot
         n_in = max(PLUME_SLOTS, 1 + math.ceil(0.5 * st.params.n_layers)) if mix_layers > 0.0 else 1
         i0 = ports.add_inlet(inst, "storage_in", None, n_in)
         j = ports.add_outlet(inst, "storage_out", None)

@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from profiles.recording import COLUMNS_FILE, read_recording, write_columns
+from profiles.columns import COLUMNS_FILE, write_columns
+from profiles.recording import read_recording
 from profiles.recording import write_csv as write_table
 
 from .. import units as unit_table

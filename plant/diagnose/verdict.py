@@ -73,8 +73,8 @@ def judge(results, ctx, nominal_train, nominal_held) -> None:
         elif r.at_bound:
             r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {', '.join(r.at_bound)} ended on a bound of "
                         "its range: the candidate absorbs a mismatch it cannot represent; rejected")
-        elif within_calibration(r, ctx):
-            r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {within_calibration(r, ctx)}: a value the "
+        elif inside := within_calibration(r, ctx):
+            r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {inside}: a value the "
                         "nominal re-fit may take itself, a calibration rather than missing physics; rejected")
         else:
             r.accepted = True

@@ -46,7 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
-from profiles.recording import write_columns, write_csv
+from profiles.columns import write_columns
+from profiles.recording import write_csv
 
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError

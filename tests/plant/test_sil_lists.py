@@ -9,7 +9,8 @@ import pytest
 
 from plant.compiler import catalogue_of
 from plant.units import convertible
-from profiles.recording import read_columns, read_recording
+from profiles.columns import read_columns
+from profiles.recording import read_recording
 
 HOUSES = Path(__file__).resolve().parents[2] / "plant" / "houses"
 #: the names reference §13.1 gives: SF1's inputs, SF2's and SF3's own inputs, the outputs it

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from plant.errors import ConfigError, DataError
-from profiles.recording import Recorder, read_recording, write_columns, write_csv
+from profiles.columns import write_columns
+from profiles.recording import Recorder, read_recording, write_csv
 
 NAMES = ["storage.T_top", "chp.P_el", "chp.on"]
 
