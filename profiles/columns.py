@@ -10,6 +10,8 @@
     "CB_CMD" = { signal = "boiler.U_set", range = [0, 100, 0, 10] }   # or a table (column_entries)
     [units]
     "TS_CHP_out" = "degC"           # the column's unit (plant/units.py); default: the signal's
+    [ports]                         # optional: the lab tank's connection heights (its datasheet),
+    storage = { top = 0.951, bottom = 0.049 }   # relative like the sensors' (0 = bottom, 1 = top)
 
 Read (shape and entries checked, every problem named at once) and written here; the CSV it
 describes is read by profiles/recording.py.
@@ -36,8 +38,8 @@ def read_columns(path: str | Path) -> dict:
     if "columns" not in doc or not isinstance(doc["columns"], dict):
         raise ConfigError(f"{p}: needs a [columns] table: \"user column\" = \"signal.name\" (or a table "
                           "{ signal = ..., unit = ..., scale = ..., offset = ..., range = [...], height = ... })")
-    if not isinstance(doc.get("units", {}), dict) or not isinstance(doc.get("recording", {}), dict):
-        raise ConfigError(f"{p}: [units] and [recording] must be tables")
+    if any(not isinstance(doc.get(k, {}), dict) for k in ("units", "recording", "ports")):
+        raise ConfigError(f"{p}: [units], [recording] and [ports] must be tables")
     return doc
 
 
@@ -103,6 +105,30 @@ def column_entries(doc: dict, path) -> tuple[dict, dict, dict]:
     if problems:
         raise ConfigError("\n".join(problems))
     return signals, units, extra
+
+
+def storage_ports(doc: dict, path) -> dict:
+    """[ports] entries: storage -> {top, bottom}, the relative heights 0 (bottom) ... 1 (top) of
+    the connections through which the storage takes and gives the coupling point's flows."""
+    out, problems = {}, []
+    for name, entry in doc.get("ports", {}).items():
+        where = f"{path}: [ports] {name}"
+        if not isinstance(entry, dict) or set(entry) != {"top", "bottom"}:
+            problems.append(f"{where} = {entry!r}: expected {{ top = ..., bottom = ... }}, the relative heights "
+                            "of the tank's upper and lower connection (0 = bottom, 1 = top)")
+            continue
+        bad = [k for k in ("top", "bottom") if isinstance(entry[k], bool) or not isinstance(entry[k], (int, float))
+               or not 0.0 <= entry[k] <= 1.0]
+        if bad:
+            problems += [f"{where} {k} = {entry[k]!r}: outside 0 … 1 (relative height of the connection: "
+                         "0 = bottom, 1 = top)" for k in bad]
+        elif entry["top"] <= entry["bottom"]:
+            problems.append(f"{where}: top = {entry['top']!r} must lie above bottom = {entry['bottom']!r}")
+        else:
+            out[str(name)] = {"top": float(entry["top"]), "bottom": float(entry["bottom"])}
+    if problems:
+        raise ConfigError("\n".join(problems))
+    return out
 
 
 def write_columns(path: str | Path, signals: dict[str, str], units: dict[str, str],

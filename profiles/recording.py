@@ -44,7 +44,7 @@ import numpy as np
 
 from plant.errors import ConfigError, DataError
 
-from .columns import COLUMNS_FILE, column_entries, read_columns
+from .columns import COLUMNS_FILE, column_entries, read_columns, storage_ports
 
 FORMAT = "house-twin recording 1"
 EVENT_COLUMNS = ("t", "kind", "transport", "client", "device", "point", "value", "accepted",
@@ -190,7 +190,8 @@ def read_recording(path: str | Path, columns: str | Path | None = None) -> Recor
     signals, units, columns_meta = column_entries(doc, columns) if doc else ({n: n for n in names}, {}, {})
     start = doc.get("recording", {}).get("start")
     time, start = _times(cells, None if start is None else str(start), f"{f}: column {tcol!r}")
-    return Recording(p, names, time, values, start, signals, units, {"columns": columns_meta}, [], dropped)
+    meta = {"columns": columns_meta, "ports": storage_ports(doc, columns) if doc else {}}
+    return Recording(p, names, time, values, start, signals, units, meta, [], dropped)
 
 
 def _times(cells: list[str], start: str | None, where: str) -> tuple[np.ndarray, str | None]:

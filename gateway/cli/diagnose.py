@@ -22,7 +22,7 @@ def register(sub) -> None:
     p.add_argument("--recording", type=Path, help="CSV with a 'time' column [s] or ISO date-times, a `twin serve "
                    "--record` directory, or a directory with columns.toml (profiles/recording.py)")
     p.add_argument("--map", type=Path, help="columns.toml: [recording] start (and time, the time column's name), "
-                   "[columns], [units]")
+                   "[columns], [units], [ports] (the lab tank's connection heights)")
     p.add_argument("--start", help="date of time = 0 (overrides the mapping)")
     p.add_argument("--out", type=Path, default=Path("report"), help="report directory (default report/)")
     p.add_argument("--train-days", type=float, default=2.0, help="training window in days (default 2)")

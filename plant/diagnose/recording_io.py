@@ -46,6 +46,7 @@ class Samples:
     valid: np.ndarray | None = None  # samples usable for scoring (False inside gaps)
     columns: dict = field(default_factory=dict)  # signal -> user column name
     heights: dict = field(default_factory=dict)  # storage sensor signal -> relative height 0 ... 1
+    ports: dict = field(default_factory=dict)    # storage -> {top, bottom}: relative port heights ([ports])
 
     def sensor_overrides(self) -> dict:
         """House overrides that put the twin's storage sensors where the recording's are."""
@@ -150,6 +151,13 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     data = {}
     heights = {}
     transforms = rec.meta.get("columns", {}) if mapping is not None else {}
+    ports = rec.meta.get("ports", {}) if mapping is not None else {}
+    storages = sorted({s.split(".", 1)[0] for s in CATALOGUE.names if ".T_sensor_" in s})
+    for name in ports:
+        if name not in storages:
+            close = get_close_matches(name, storages, n=2)
+            raise ConfigError(f"{mapping}: [ports] {name}: not a storage of the twin"
+                              + (f"; did you mean {', '.join(close)}?" if close else f"; storages: {', '.join(storages)}"))
     for col, sig in colmap.items():
         u = units[col]
         cat_unit = CATALOGUE.signal(sig).unit
@@ -210,7 +218,7 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
             else:
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
     return Samples(str(p), str(start), t, data, warnings, valid,
-                   {sig: col for col, sig in colmap.items()}, heights)
+                   {sig: col for col, sig in colmap.items()}, heights, ports)
 
 
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,

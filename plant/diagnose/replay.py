@@ -123,7 +123,8 @@ class Replayer:
         # re-fitted nominal parameters (calibration.refit_nominal): applied to every run; a run's own
         # overrides take precedence over them
         self.base: dict = {}
-        self.sensors = rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}
+        # where the lab's storage sensors and ports are (columns file): every run starts from them
+        self.lab = {**(rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}), **self._lab_ports()}
         # the end of the training window (diagnose sets it): the pipe sensors' cooling time
         # constants are fitted up to it (pipe_sensor.py); pipe_tau holds the last run's
         self.t_train: float | None = None
@@ -153,6 +154,33 @@ class Replayer:
         if self.radiator:
             simulated += list(cut_mod.RADIATOR_OUTPUTS)
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
+
+    def _lab_ports(self) -> dict:
+        """Overrides that put the storage's ports where the recording's [ports] says: the
+        coupling point's storage_top / storage_bottom [m] from the relative heights."""
+        from ..declaration import load
+
+        ports = getattr(self.rec, "ports", None) or {}
+        if not ports:
+            return {}
+        spec = load(self.plant_name)
+        out = {}
+        for name, rel in ports.items():
+            points = [i for i in spec.instances.values()
+                      if i.options.get("storage") == name and "storage_top" in i.options]
+            if not points or name not in spec.instances:
+                raise ConfigError(f"[ports] {name}: {self.plant_name} has no coupling point whose storage is "
+                                  f"{name!r}; ports can be declared for "
+                                  + (", ".join(sorted({i.options["storage"] for i in spec.instances.values()
+                                                       if "storage_top" in i.options})) or "no storage"))
+            H = float(spec.instances[name].params.height)
+            for inst in points:
+                out[f"{inst.name}.storage_top"] = rel["top"] * H
+                out[f"{inst.name}.storage_bottom"] = rel["bottom"] * H
+                self.notes.append(f"{name}: ports at {rel['top'] * H:.3f} m and {rel['bottom'] * H:.3f} m from the "
+                                  f"columns file's [ports] (house file: {inst.options['storage_top']} m and "
+                                  f"{inst.options['storage_bottom']} m)")
+        return out
 
     def _plant_room(self) -> tuple:
         """(what the stagnant pipes cool toward, where it comes from): read off the recording's
@@ -213,7 +241,7 @@ class Replayer:
 
     def run(self, overrides: dict | None = None, until: float | None = None) -> np.ndarray:
         """Rows [n_samples, n_signals] (house 1's catalogue order) at the recording's sample times."""
-        ov = {**self.sensors, **self.base, **(overrides or {})}
+        ov = {**self.lab, **self.base, **(overrides or {})}
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         plant_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] not in self.removed}
         sub_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] in self.removed}

@@ -34,6 +34,7 @@ from .storage import Tank, coil_heat
 
 STORAGE_SENSOR_HEIGHTS = (0.12, 0.27, 0.42, 0.57, 0.72, 0.87, 1.02, 1.17, 1.32, 1.50)  # m, 1.63 m tank
 DHW_SENSOR_HEIGHTS = {1: 0.10, 5: 0.70, 10: 1.40}  # m, 1.51 m tank
+STORAGE_PORT_HEIGHTS = {"top": 1.55, "bottom": 0.08}  # m: where the switch's flows enter and leave
 R_STORAGE = 2500.0     # Pa/(kg/s)^2
 HEADER_KG = 20.0
 T_COLD, T_TAP = 10.0, 45.0
@@ -62,9 +63,10 @@ class LabHouse:
         self.dhw = Tank(0.5, 1.51, 30, 7.0, 18.0, 40.0, 60.0)
         plume = max(1, int(round(e["plume_litres"] / (self.storage.M)))) if e["plume_litres"] > 0 else 1
         self.plume_litres_applied = plume * self.storage.M  # whole layers: 120 l asked is 8 x 16 l
-        self.w_top = self.storage.spread(1.55, plume, downward=True)
-        self.w_bottom = self.storage.spread(0.08, plume, downward=False)
-        self.top, self.bottom = self.storage.layer(1.55), self.storage.layer(0.08)
+        top, bottom = STORAGE_PORT_HEIGHTS["top"], STORAGE_PORT_HEIGHTS["bottom"]
+        self.w_top = self.storage.spread(top, plume, downward=True)
+        self.w_bottom = self.storage.spread(bottom, plume, downward=False)
+        self.top, self.bottom = self.storage.layer(top), self.storage.layer(bottom)
         self.coil = range(self.dhw.layer(0.75), self.dhw.layer(1.21) + 1)
         self.coil_UA = 640.0 * e["coil_factor"]
         self.mixer, self.radiator, self.building = MixingStation(e["valve_leak"]), Radiator(30.0), Building()
@@ -204,4 +206,4 @@ class LabHouse:
         return L
 
 
-__all__ = ["LabHouse", "STORAGE_SENSOR_HEIGHTS", "DHW_SENSOR_HEIGHTS", "TEMPERATURE_TAGS", "DEFAULT_EFFECTS"]
+__all__ = ["LabHouse", "STORAGE_SENSOR_HEIGHTS", "DHW_SENSOR_HEIGHTS", "STORAGE_PORT_HEIGHTS", "TEMPERATURE_TAGS", "DEFAULT_EFFECTS"]

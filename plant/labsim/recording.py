@@ -24,7 +24,7 @@ import numpy as np
 from profiles.recording import write_csv
 
 from .control import L_MIN
-from .house import DHW_SENSOR_HEIGHTS, STORAGE_SENSOR_HEIGHTS, LabHouse
+from .house import DHW_SENSOR_HEIGHTS, STORAGE_PORT_HEIGHTS, STORAGE_SENSOR_HEIGHTS, LabHouse
 from .sensors import Daq
 
 # DAQ tag, catalogue signal (None: not mapped), unit as logged, DAQ kind, source
@@ -84,12 +84,17 @@ def _read(h: LabHouse, tag: str, source: str) -> float:
 STORAGE_HEIGHT_M, DHW_HEIGHT_M = 1.63, 1.51  # the tanks' heights: sensor heights are relative to them
 
 
-def _write_columns(path, start, name):
+def _write_columns(path, start, name, ports: bool = True):
     """columns.toml: each DAQ tag onto its twin signal with the unit the lab logs; the storage
-    sensors with their relative heights; the boiler command in % onto 0-10 V (a range map)."""
+    sensors with their relative heights; the boiler command in % onto 0-10 V (a range map); the
+    storage's port heights (ports=False: left out, as a lab that does not know them would)."""
     lines = ["# labsim (plant/labsim): lab DAQ tag -> twin catalogue signal, the unit the lab logs,",
-             "# storage sensor heights relative to the tank (0 = bottom, 1 = top)",
-             "[recording]", f'start = "{start}"', f'file = "{name}"', "", "[columns]"]
+             "# storage sensor and port heights relative to the tank (0 = bottom, 1 = top)",
+             "[recording]", f'start = "{start}"', f'file = "{name}"', ""]
+    if ports:
+        lines += ["[ports]", "storage = { top = %.4f, bottom = %.4f }" % (
+            STORAGE_PORT_HEIGHTS["top"] / STORAGE_HEIGHT_M, STORAGE_PORT_HEIGHTS["bottom"] / STORAGE_HEIGHT_M), ""]
+    lines.append("[columns]")
     heights = {f"TS_S_TM_BT_{i}": h / STORAGE_HEIGHT_M for i, h in enumerate(STORAGE_SENSOR_HEIGHTS, 1)}
     heights.update({f"WWS_S_TM_BT_{i}": h / DHW_HEIGHT_M for i, h in DHW_SENSOR_HEIGHTS.items()})
     for tag, signal, unit, *_ in COLUMNS:
@@ -105,8 +110,9 @@ def _write_columns(path, start, name):
 
 
 def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str, truth: dict,
-           command: str | None = None) -> dict:
-    """Run `house` for `days` and write recording.csv, columns.toml and meta.json into `out`."""
+           command: str | None = None, ports: bool = True) -> dict:
+    """Run `house` for `days` and write recording.csv, columns.toml and meta.json into `out`
+    (ports: declare the storage's port heights in columns.toml)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed + 1000)
@@ -135,7 +141,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
     for old in ("recording.csv", "recording.csv.gz"):
         (out / old).unlink(missing_ok=True)
     name = write_csv(out / "recording.csv", t_log, data, ["%.3f"] + [FMT[c[3]] for c in COLUMNS]).name
-    _write_columns(out / "columns.toml", start, name)
+    _write_columns(out / "columns.toml", start, name, ports)
     ledger = house.closure()
     meta = {**truth, "start": start, "days": days, "seed": seed, "sample_s": SAMPLE_S, "rows": n,
             "file": name, "columns": [c[0] for c in COLUMNS],
@@ -143,6 +149,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
             "step_s": house.dt,
             "storage_sensor_heights_m": dict(zip([f"TS_S_TM_BT_{i}" for i in range(1, 11)], STORAGE_SENSOR_HEIGHTS)),
             "dhw_sensor_heights_m": {f"WWS_S_TM_BT_{i}": h for i, h in DHW_SENSOR_HEIGHTS.items()},
+            "storage_port_heights_m": STORAGE_PORT_HEIGHTS, "ports_declared": ports,
             "instruments": {"temperature": "thermowell lag 15 s (room 120 s, outdoor 60 s), stagnant pipe "
                             "cools to 20 degC (1200 s), DAQ noise 0.05 K, 0.1 K steps",
                             "flow": "1 % noise, cut-off 0.2 l/min, 0.1 l/min steps; no meter in the CHP branch",

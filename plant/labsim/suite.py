@@ -1,8 +1,11 @@
 """The public suite of `twin diagnose` made by labsim: cases with known answers.
 
-    python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N] [--list]
+    python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N]
+                                 [--no-ports] [--list]
 
-writes DIR/<case>/ (recording.csv, columns.toml, meta.json) per case; meta.json holds the truth:
+writes DIR/<case>/ (recording.csv, columns.toml, meta.json) per case; columns.toml declares the
+storage's sensor and port heights as a lab knows them from its tank's datasheet (--no-ports: the
+port heights left out, so the twin keeps its own); meta.json holds the truth:
 the case, its effects and sizes, and `expected`, the diagnosis outcomes counted as correct (an
 effect id of plant/diagnose/effects, or a verdict: no_missing_physics, unexplained_mismatch).
 
@@ -69,8 +72,9 @@ CASES: dict[str, tuple[str, dict, list[str], dict]] = {
 
 
 def make_case(case: str, out: str | Path, days: float = 7.0, start: str = "2021-01-10",
-              seed: int | None = None, command: str | None = None) -> dict:
-    """Simulate one case and write its recording directory `out`; returns meta.json's content."""
+              seed: int | None = None, command: str | None = None, ports: bool = True) -> dict:
+    """Simulate one case and write its recording directory `out`; returns meta.json's content
+    (ports=False: columns.toml does not declare the storage's port heights)."""
     if case not in CASES:
         raise KeyError(f"case {case!r}: unknown; known: {', '.join(CASES)}")
     desc, effects, expected, sizes = CASES[case]
@@ -79,7 +83,7 @@ def make_case(case: str, out: str | Path, days: float = 7.0, start: str = "2021-
     if "plume_litres" in sizes:  # the plume the tank applies: whole layers
         sizes = {**sizes, "plume_litres_applied": house.plume_litres_applied}
     truth = {"case": case, "description": desc, "effects": effects, "sizes": sizes, "expected": expected}
-    return record(house, out, days, seed, start, truth, command)
+    return record(house, out, days, seed, start, truth, command, ports)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--start", default="2021-01-10")
     p.add_argument("--seed", type=int, help="noise seed of every case (default: each case its own)")
     p.add_argument("--case", nargs="+", action="extend", help="case names (default: all; repeatable)")
+    p.add_argument("--no-ports", action="store_true", help="leave the storage's port heights out of columns.toml")
     p.add_argument("--list", action="store_true", help="list the cases and exit")
     a = p.parse_args(argv)
     if a.list or a.out is None:
@@ -101,8 +106,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"unknown case {case!r}; --list shows them", file=sys.stderr)
             return 2
         cmd = (f"python -m plant.labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
-               + (f" --seed {a.seed}" if a.seed is not None else ""))
-        m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd)
+               + (f" --seed {a.seed}" if a.seed is not None else "") + (" --no-ports" if a.no_ports else ""))
+        m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd, ports=not a.no_ports)
         print(f"{case:<24} {m['rows']} rows, closure {m['ledger_closure']:.1e}, "
               f"{m['generation_wall_s']:.1f} s  {m['effect_size']}", flush=True)
     return 0

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from plant.catalogue import CATALOGUE
 from plant.diagnose import recording_io, replay, synth
 from plant.errors import ConfigError, DataError
 
@@ -156,6 +157,51 @@ def test_bad_column_entries_are_named(tmp_path, rec, entry, needle):
     with pytest.raises(ConfigError) as exc:
         recording_io.load(csv, m)
     assert needle in str(exc.value) and str(m) in str(exc.value)
+
+
+def test_declared_port_heights_move_the_twins_ports(tmp_path, rec):
+    """[ports] storage = { top, bottom } (relative, as the lab's datasheet gives them) puts the
+    coupling point's storage ports there in every replay: the surplus then enters below the
+    top layers, which only warm by buoyancy, and the top sensor reads otherwise."""
+    from plant.diagnose.replay import Replayer
+
+    csv, m = _write(tmp_path, rec)
+    plain = Replayer(recording_io.load(csv, m))
+    m.write_text(m.read_text() + "\n[ports]\nstorage = { top = 0.9, bottom = 0.1 }\n")
+    r = recording_io.load(csv, m)
+    assert r.ports == {"storage": {"top": 0.9, "bottom": 0.1}}
+    rp = Replayer(r)
+    assert rp.lab["switch.storage_top"] == pytest.approx(0.9 * 1.63)
+    assert rp.lab["switch.storage_bottom"] == pytest.approx(0.1 * 1.63)
+    assert any("ports at 1.467 m and 0.163 m" in n and "house file: 1.6 m and 0.03 m" in n for n in rp.notes)
+    until = 6 * 3600.0
+    top = CATALOGUE.index("storage.T_sensor_10")
+    a, b = plain.run(until=until)[:, top], rp.run(until=until)[:, top]
+    assert np.nanmax(np.abs(a - b)) > 0.5
+
+
+@pytest.mark.parametrize("table, needle", [
+    ("storage = { top = 1.2, bottom = 0.1 }", "[ports] storage top = 1.2: outside 0 … 1"),
+    ("storage = { top = 0.1, bottom = 0.9 }", "top = 0.1 must lie above bottom = 0.9"),
+    ("storage = { upper = 0.9, bottom = 0.1 }", "expected { top = ..., bottom = ... }"),
+    ("storag = { top = 0.9, bottom = 0.1 }", "[ports] storag: not a storage of the twin; did you mean storage"),
+])
+def test_bad_port_heights_are_named(tmp_path, rec, table, needle):
+    csv, m = _write(tmp_path, rec)
+    m.write_text(m.read_text() + f"\n[ports]\n{table}\n")
+    with pytest.raises(ConfigError) as exc:
+        recording_io.load(csv, m)
+    assert needle in str(exc.value) and str(m) in str(exc.value)
+
+
+def test_ports_of_a_storage_without_a_coupling_point_are_refused(tmp_path, rec):
+    from plant.diagnose.replay import Replayer
+
+    csv, m = _write(tmp_path, rec)
+    m.write_text(m.read_text() + "\n[ports]\ndhw_storage = { top = 0.9, bottom = 0.1 }\n")
+    with pytest.raises(ConfigError, match=r"\[ports\] dhw_storage: house1\S* has no coupling point whose "
+                                          r"storage is 'dhw_storage'; ports can be declared for storage"):
+        Replayer(recording_io.load(csv, m))
 
 
 def test_a_recording_too_short_for_a_held_out_window_says_so():

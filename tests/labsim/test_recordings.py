@@ -36,6 +36,7 @@ def test_a_day_of_each_case_type_is_readable(case, tmp_path):
     assert 0.0 <= np.nanmax(s.data["chp.y_set"]) <= 1.0 and np.nanmax(s.data["boiler.U_set"]) <= 10.0
     assert np.allclose(s.data["boiler.U_set"], rec.column("CB_CMD_U"), atol=0.05)  # the range map gives the V channel
     assert s.sensor_overrides()["storage.sensor_heights"][0] == pytest.approx(0.12 / 1.63, abs=1e-4)
+    assert s.ports["storage"] == pytest.approx({"top": 1.55 / 1.63, "bottom": 0.08 / 1.63}, abs=1e-4)
     assert 10.0 < np.nanmedian(s.data["storage.T_sensor_5"]) < 90.0
     m = json.loads((tmp_path / case / "meta.json").read_text())
     assert m["case"] == case and m["expected"] == CASES[case][2] and m["effects"] == CASES[case][1]
