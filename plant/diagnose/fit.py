@@ -230,7 +230,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
 
     p = effect.params[0]
     t = ctx.rec.time
-    best = None
+    tried = []
     nfev = 0
     alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
@@ -277,12 +277,18 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
         # (a structural bias included): a local one whose share would pass LOCAL_GAIN goes first
         local = c is not None or s in alone
         key = (local and red >= LOCAL_GAIN, red)
-        if best is None or key > best[0]:
-            best = (key, j, v, f, y0, local, y_before)
-    if best is None:
+        tried.append((key, j, v, f, y0, local, y_before, J0 - J, s.rpartition(".T_sensor_")[0] if c is not None else None))
+    if not tried:
         return Result(effect.id, effect.component, effect.kind, False, "no eligible measured signal",
                       effect=effect)
-    _, j, v, f, y0, local, y_before = best
+    best = max(tried, key=lambda x: x[0])
+    if best[8] is not None and best[0][0]:
+        # among the sensors of that storage that pass, the one whose residual it removes most in
+        # K^2: an offset d on one sensor leaves -d/2 on each neighbour's relative residual, which
+        # an offset removes as wholly (by the share alone, labsim's +1.5 K on sensor 5 was once
+        # fitted as -0.72 K on sensor 6)
+        best = max((x for x in tried if x[8] == best[8] and x[0][0]), key=lambda x: x[7])
+    _, j, v, f, y0, local, y_before, _, _ = best
     sim = nominal_sim.copy()
     sim[:, j] = effect.apply(t, y0, [v])
     m = ctx.train & ctx.ok[:, j]

@@ -246,3 +246,24 @@ def test_a_candidate_within_the_nominal_refit_range_is_a_calibration_not_missing
     plume = fit.Result("storage_mixing", "storage", "simulate", True, theta=[0.12], effect=effect["storage_mixing"])
     assert verdict.within_calibration(plume, ctx) == ""        # no re-fit range given for the plume here
 
+
+
+
+def test_a_storage_sensor_offset_is_put_on_its_own_sensor_not_a_neighbour():
+    """An offset d on one storage sensor leaves -d/2 on each neighbour's residual relative to its
+    own neighbours, which an offset there removes as wholly: the share of the residual removed
+    cannot tell them apart (it picked the first, sensor 4), the residual removed in K^2 can (4:1)."""
+    import numpy as np
+    from plant.diagnose.context import Context
+
+    rec = synth.make("none", days=1.0, noise=False)
+    ctx = Context.build(rec, train_days=0.5)
+    sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0)
+    j = ctx.measured.index("storage.T_sensor_5")
+    # the lab's sensor 5 reads 1.5 K high, and wanders 0.8 K besides (what the twin misses there)
+    wander = 0.8 * np.sin(2.0 * np.pi * rec.time / 21600.0)
+    sim[:, j] -= 1.5 + wander
+    offset = next(e for e in catalogue() if e.id == "sensor_offset")
+    r = fit.fit_signal(offset, ctx, sim)
+    assert r.signal == "storage.T_sensor_5"
+    assert r.theta[0] == pytest.approx(1.5 + wander[ctx.train & ctx.ok[:, j]].mean(), abs=1e-6)
