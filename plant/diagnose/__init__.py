@@ -96,6 +96,8 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     verdict_mod.judge(results, ctx, J0t, J0h)
     verdict, best, twins, explained = verdict_mod.select(results, ctx, sim0, affected)
     chosen = forward.extend(best, results, twins, ctx, rp) if verdict == "missing_physics" else []
+    # the report's "after": the model that holds every chosen effect (the best alone when only it)
+    final = forward.final(chosen) if len(chosen) > 1 else best
     timing["fit"] = time.perf_counter() - t2
 
     t3 = time.perf_counter()
@@ -105,7 +107,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     from . import report as _report
 
     t4 = time.perf_counter()
-    rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc,
+    rep = _report.build(ctx, house, nominal_rows, sim0, results, verdict, final, twins, explained, loc,
                         terms, warnings)
     rep["nominal_refit"] = _report.nominal_refit(nref, ctx, sim0, best)
     rep["effects"] = forward.public(chosen, ctx)
@@ -123,7 +125,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
                            for flow, tau in pipe_tau.items()}
     _report.flag_bounds(rep, results)
     if out is not None:
-        _report.write(rep, out, ctx, nominal_rows, best, plots=plots)
+        _report.write(rep, out, ctx, nominal_rows, final, plots=plots)
     timing["report"] = time.perf_counter() - t4
     timing["total"] = time.perf_counter() - t0
     rep["timing_s"] = timing

@@ -218,13 +218,14 @@ def common_mode(ctx, nominal_sim, j):
 LOCAL_GAIN = 0.35
 
 
-def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
+def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None) -> Result:
     """Fit a post-processing candidate to each eligible signal; keep the one whose own residual
     it reduces by the largest share on training (a sensor effect explains its sensor's residual
     nearly whole; a structural difference it imitates, only in part). On a storage sensor the effect acts on the twin's
     value plus the neighbours' common residual (common_mode) and is judged there (Result.local);
     on the return of the radiator replayed alone (replayer given) it is fitted jointly with the
-    radiator's rating and water content and judged on that return alone (Result.local)."""
+    radiator's rating and water content and judged on that return alone (Result.local). only: fit
+    on that signal alone (a sensor effect fitted again on another model's reading)."""
     from ..catalogue import CATALOGUE
     from .cut import RADIATOR_OUTPUTS
 
@@ -234,7 +235,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None) -> Result:
     nfev = 0
     alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
-        if CATALOGUE.signal(s).unit not in effect.signal_units:
+        if CATALOGUE.signal(s).unit not in effect.signal_units or (only is not None and s != only):
             continue
         c = common_mode(ctx, nominal_sim, j)
         y0 = nominal_sim[:, j] + (c if c is not None else 0.0)

@@ -13,7 +13,12 @@ joins, and the search repeats (at most MAX_EFFECTS effects). How a candidate goe
   * a plant candidate on top of a plant effect: one replay with both sets of overrides at their
     fitted values (no re-fit: the first effect's fit already absorbed what it could).
 A candidate on the same signal or component as a chosen one, or indistinguishable from it, is not
-tried: it would explain the same residual twice.
+tried: it would explain the same residual twice. When a plant effect joins, the sensor effects
+chosen before it are fitted again on its reading, each on its own signal: fitted on the nominal
+twin, a sensor effect takes up what the plant effect does to its sensor (labsim
+pair_idle_flow_lag: the top sensor's 600 s lag fitted as 727 s alone). `effects` reports those
+joint values (`refitted_with`), and the report's headline (parameters, "after") is the model that
+holds every chosen effect (`final`).
 """
 from __future__ import annotations
 
@@ -85,10 +90,47 @@ def extend(best, results, twins, ctx, replayer) -> list:
         if not acc:
             break
         nxt = acc[0]
+        if nxt.kind == "simulate" and nxt.rows is not None:
+            chosen = _refit_sensors(chosen, nxt, ctx)
         chosen.append(nxt)
         tried.add(nxt.id)
         current = nxt.sim
     return chosen
+
+
+def _refit_sensors(chosen, plant, ctx) -> list:
+    """The chosen sensor effects fitted again on the reading of the model with `plant` joined
+    (its replay's measured columns), each on its own signal; `plant.sim` takes their columns.
+    -> chosen, the sensor effects replaced by their re-fitted copies."""
+    sim = plant.rows[:, ctx.cols].copy()
+    out = []
+    for c in chosen:
+        if c.kind != "signal":
+            out.append(c)
+            continue
+        r = fit.fit_signal(c.effect, _based_on(ctx, sim), sim, only=c.signal)
+        if not r.plausible:
+            out.append(c)
+            continue
+        j = ctx.measured.index(c.signal)
+        sim[:, j] = r.sim[:, j]
+        c2 = copy.copy(c)
+        c2.theta, c2.stderr, c2.sim = r.theta, r.stderr, sim
+        c2.refitted_with = plant.id
+        out.append(c2)
+    plant.sim = sim
+    return out
+
+
+def final(chosen):
+    """The diagnosed model as one Result: the named effect with its values in the model that
+    holds every chosen effect (fitted again when a plant effect joined), that model's simulation,
+    and the rows of its last plant replay (None: sensor effects only, the heat flows are the
+    nominal's)."""
+    f = copy.copy(chosen[0])
+    f.sim = chosen[-1].sim
+    f.rows = next((c.rows for c in reversed(chosen) if c.kind == "simulate" and c.rows is not None), None)
+    return f
 
 
 def public(chosen, ctx) -> list[dict]:
@@ -99,5 +141,5 @@ def public(chosen, ctx) -> list[dict]:
         out.append({"effect": r.id, "component": r.signal or r.component, "parameters": p["parameters"],
                     "summary": r.effect.summary(r.theta, ctx, r.rows),
                     "heldout_gain_over_previous": r.held_gain, "reason": r.reason,
-                    "order": i + 1})
+                    "order": i + 1, "refitted_with": getattr(r, "refitted_with", None)})
     return out

@@ -75,14 +75,16 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     affected = loc["mismatched_signals"]
     if best is not None and best.signal:
         affected = [best.signal]
+        if best.rows is not None:  # a plant effect joined the sensor effect: the signals it moves too
+            affected += [s for s in locate.moved_signals(ctx, sim0, after, ctx.held) if s != best.signal]
     elif best is not None:
         affected = locate.moved_signals(ctx, sim0, after, ctx.held) or affected
     by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(s) != "K"))
     energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
     energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
-    if best is not None and best.kind == "signal":
+    if best is not None and best.kind == "signal" and best.rows is None:
         for e in (energy, energy_held):
-            for d in e.values():  # a sensor effect does not change the heat flows
+            for d in e.values():  # sensor effects (alone) do not change the heat flows
                 d["simulated_after_kWh"] = d["simulated_before_kWh"]
                 if "error_before_pct" in d:
                     d["error_after_pct"] = d["error_before_pct"]

@@ -8,7 +8,8 @@ each exercising one part of the method on independent data:
   * idle_flow_small: the stagnant-pipe sensor model turns an idle CHP that keeps flowing into
     evidence (masked, it was missed);
   * transport_delay_600: the radiator replayed alone, calibrated, with the delay fitted jointly
-    with it and judged on its return.
+    with it and judged on its return;
+  * pair_idle_flow_lag: two effects, a sensor effect named first and a plant effect on top.
 
 The full 7-day suite (19 cases) with its confusion table: benchmarks/diagnose_independent.py.
 """
@@ -59,3 +60,22 @@ def test_a_late_return_sensor_is_named_on_the_radiator_replayed_alone(labsim):
     assert rep["effect"] == "transport_delay" and rep["component"] == "mixer.T_ret", rep["finding"]
     assert abs(rep["parameters"]["delay"]["value"] / 600.0 - 1.0) < 0.2
     assert rep["affected_heldout_rmse_after"] < 0.5 * rep["affected_heldout_rmse_before"]
+
+
+def test_a_lagging_top_sensor_and_an_idle_chp_that_keeps_flowing_are_both_named(labsim):
+    """Two effects at once: the lag is named first (judged on the top sensor's own residual); the
+    idle flow, which a whole-model comparison had called the lag's twin, joins on top of it, and
+    the lag is fitted again with the idle flow in place (fitted alone it takes up part of what
+    the idle flow does to the top sensor)."""
+    meta, rep = labsim("pair_idle_flow_lag")
+    assert rep["effect"] == "sensor_lag" and rep["component"] == "storage.T_sensor_10", rep["finding"]
+    assert "idle_generator_flow" not in rep["indistinguishable_from"]
+    effects = {e["effect"]: e for e in rep["effects"]}
+    assert set(effects) == {"sensor_lag", "idle_generator_flow"}, rep["effects"]
+    lag = effects["sensor_lag"]
+    assert lag["refitted_with"] == "idle_generator_flow"
+    assert lag["parameters"]["tau"] == rep["parameters"]["tau"]  # the headline is the joint model's
+    assert abs(lag["parameters"]["tau"]["value"] / meta["sizes"]["tau_s"] - 1.0) < 0.25
+    assert effects["idle_generator_flow"]["parameters"]["idle_flow_chp"]["value"] > 0.2
+    # the report's "after" holds both: the signals the idle flow moves count among the affected
+    assert {"storage.T_sensor_10", "chp.T_ret"} <= set(rep["affected_signals"])
