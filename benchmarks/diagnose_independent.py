@@ -27,7 +27,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from plant.diagnose import diagnose, recording_io  # noqa: E402
 from plant.labsim.suite import CASES, make_case  # noqa: E402
-from profiles.columns import column_entries, read_columns  # noqa: E402
 
 
 def _plume_litres(rep):
@@ -62,14 +61,13 @@ def size_error(rep, meta):
     return est, truth, est / truth - 1.0
 
 
-def right_sensor(rep, meta, d) -> bool:
+def right_sensor(rep, meta, rec) -> bool:
     """A sensor effect counts only on the sensor the truth put it on (meta.json sizes `tag`: the
-    lab's DAQ tag, mapped to the twin's signal by the case's columns file)."""
+    lab's DAQ tag, the recording's column of the twin's signal)."""
     tag = meta["sizes"].get("tag")
     if rep["effect"] not in ("sensor_lag", "sensor_offset", "transport_delay") or tag is None:
         return True
-    signals, _, _ = column_entries(read_columns(d / "columns.toml"), d / "columns.toml")
-    return rep["component"] == signals.get(tag)
+    return rec.columns.get(rep["component"]) == tag
 
 
 def main():
@@ -97,7 +95,7 @@ def main():
             wall = time.perf_counter() - t
             got = rep["effect"] or rep["verdict"]
             want = meta["expected"]
-            ok = got in want and right_sensor(rep, meta, d)
+            ok = got in want and right_sensor(rep, meta, rec)
             est = ", ".join(f"{k}={v['value']:.4g}" for k, v in rep["parameters"].items()) or "-"
             size = size_error(rep, meta)
             if size:
