@@ -53,7 +53,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
         log("nominal re-fit: " + ", ".join(f"{p['name']} {p['file_value']:.4g} -> {p['fitted_value']:.4g}"
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
-    pipe_tau = dict(rp.pipe_tau)
+    pipe_fit = dict(rp.pipe_fit)
     ctx.nominal_rows = nominal_rows  # the replayed states, for candidates' plausible()
     ctx.nominal_sim = sim0
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
@@ -117,12 +117,13 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
             f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in chosen[1:])
     rep["radiator_calibration"] = radiator_cal
     rep["mixer_calibration"] = mixer_cal
-    rep["pipe_sensors"] = {flow: {"tau_s": tau if 0 < tau < math.inf else None,
-                                  "reading": "cools" if 0 < tau < math.inf else "holds" if tau else "as simulated",
-                                  "at_bound": pipe_sensor.at_bound(tau),
+    rep["pipe_sensors"] = {flow: {"tau_s": f.tau if 0 < f.tau < math.inf else None,
+                                  "reading": "cools" if 0 < f.tau < math.inf else "holds" if f.tau else "as simulated",
+                                  "pipe_water_kg": f.mass if f.tau else None,
+                                  "at_bound": pipe_sensor.at_bound(f),
                                   "T_plant_room_degC": rp._T_room,
                                   "T_plant_room_from": rp._T_room_from}
-                           for flow, tau in pipe_tau.items()}
+                           for flow, f in pipe_fit.items()}
     _report.flag_bounds(rep, results)
     if out is not None:
         _report.write(rep, out, ctx, nominal_rows, final, plots=plots)

@@ -1,23 +1,36 @@
-"""A temperature sensor on a pipe that stands still: modelled, so it can carry evidence.
+"""A temperature sensor on a pipe that stands or barely flows: modelled, so it can carry evidence.
 
-A sensor in a pipe reads its fluid only while the fluid flows. When the branch stands, the water
-at the sensor cools toward the plant room (Newton cooling of the stagnant pipe water), which the
-twin's generator (it holds its outlet at the last running value) does not model. The replay's
-reading of such a sensor therefore follows the branch's *simulated* flow: the fluid temperature
-while it flows, else an exponential from the last flowing value toward the plant-room temperature
-(the replayed house's `storage.T_env`) with time constant tau.
+A sensor in a pipe reads its fluid while the fluid flows. When the branch stands, the water at the
+sensor cools toward the plant room (Newton cooling of the stagnant pipe water), which the twin's
+generator (it holds its outlet at the last running value) does not model. Between the two, a
+trickle renews the water at the sensor only in part: the replay's reading follows the branch's
+*simulated* flow m through the pipe water M upstream of the sensor (plug flow): in a sample
+interval dt the share r = min(1, m dt / M) of the water at the sensor is fresh fluid, the rest has
+cooled toward the plant-room temperature with time constant tau:
+
+    T_k = r fluid_k + (1 - r) (T_room + (T_{k-1} - T_room) exp(-dt / tau))
+
+A running branch (m dt >= M) reads its fluid exactly and a standing one (m = 0) the exponential from
+its last flowing value, as a switch between the two would; a trickle reads in between, continuously
+in m.
 
 Why a model and not a mask: which branch flows is itself what some missing physics changes. An
 idle CHP that a header short-circuit keeps flowing reads the return water in the lab, while a
 stagnant twin CHP reads a cooled pipe: masked, that difference (the clearest sign of the idle
 flow) was invisible; modelled, the candidate that makes the twin's CHP branch flow removes it.
+Why continuous in m: an idle flow of a few tenths of a g/s (labsim's pair_idle_flow_lag at night)
+kept the lab's sensors on the return header's water for hours, while a switch at 1 g/s left the
+twin's sensors cooling (8-9 K held-out on both CHP sensors); a switch at any other flow is as
+arbitrary, and would make a candidate's cost jump where its flow crosses it.
 
-tau (a pipe's insulation, diameter and the sensor's well, not on any data sheet) is calibrated
-per branch on the training window only, over a log grid within TAU_RANGE and infinity (the
-reading holds), separately for every replay (the nominal twin and each candidate alike, so it
-cancels in their comparison), or the reading holds, or it is the replay's own stagnant fluid
-(AS_SIMULATED: the twin's own recordings); a value on a bound of the range is reported. A replay
-that fits nothing (no training window given) keeps its own value.
+tau (a pipe's insulation, diameter and the sensor's well) and M (where the sensor sits on its
+pipe), on no data sheet, are calibrated per branch on the training window only, at the samples
+where the replay's branch does not run (m <= FLOWING): tau over a log grid within TAU_RANGE and
+infinity (the reading holds), M over MASS_GRID, each then refined between its grid neighbours;
+separately for every replay (the nominal twin and each candidate alike, so they cancel in their
+comparison); or the replay's own stagnant fluid (AS_SIMULATED: the twin's own recordings). A value
+on a bound of the range is reported. A replay that fits nothing (no training window given) keeps its
+own value.
 
 The temperature the pipes cool toward (the air around them, not the storage's T_env) is read off
 the recording, not fitted in each replay: the lowest of the branches' median readings after
@@ -34,8 +47,10 @@ else its command) switches: there the sample's instant within the interval is un
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 from scipy.optimize import minimize_scalar
 
 # sensor -> (its branch's flow signal, the command that starts the branch, command threshold)
@@ -44,13 +59,18 @@ STAGNANT_PIPE = {
     "boiler.T_sup": ("boiler.m_flow", "boiler.U_set", 2.0), "boiler.T_ret": ("boiler.m_flow", "boiler.U_set", 2.0),
     "mixer.T_sup": ("mixer.m_flow", "mixer.m_flow_set", 0.005), "mixer.T_ret": ("mixer.m_flow", "mixer.m_flow_set", 0.005),
 }
-FLOWING = 1e-3                 # kg/s
+FLOWING = 1e-3                 # kg/s: a recorded flow above it is a branch that flows; a simulated
+#                                one at or below it carries the fit of tau and M (a running pump moves 20x more)
 TAU_RANGE = (300.0, 7200.0)    # s: a bare DN20-40 pipe ... a lagged one with an immersion well
 # besides the cooling pipe: inf, the reading holds the last flowing value (a sensor inside the
 # unit's body, a logger that holds); AS_SIMULATED (0), the replay's own value of the stagnant
 # fluid (the twin's own recordings; also what a replay that fits nothing keeps)
 AS_SIMULATED = 0.0
 TAU_GRID = np.concatenate([[AS_SIMULATED], np.geomspace(*TAU_RANGE, 14), [np.inf]])
+# kg of pipe water upstream of the sensor: a well at the junction ... a metre and a half of DN25
+# (at 60 s samples a flow of 0.017 ... 17 g/s renews it within a sample)
+MASS_RANGE = (1e-3, 1.0)
+MASS_GRID = np.geomspace(*MASS_RANGE, 7)
 T_PLANT_ROOM_DEFAULT = 20.0    # degC, when the replayed house has no storage stating T_env
 ROOM_RANGE = (5.0, 35.0)       # degC: what a pipe may cool toward (a plant room, a cellar, a loft)
 ROOM_AFTER = 6 * 3600.0        # s of recorded standstill after which a pipe reads its room (5 tau at
@@ -110,63 +130,94 @@ def plant_room(rec) -> float | None:
     return min(max(min(out), ROOM_RANGE[0]), ROOM_RANGE[1]) if out else None
 
 
-def cooled(t: np.ndarray, fluid: np.ndarray, flowing: np.ndarray, tau: float, T_room: float) -> np.ndarray:
-    """The sensor reading: `fluid` while flowing, else the last flowing value relaxing toward
-    T_room with time constant tau (before the first flowing sample: from the first value);
+class PipeFit(NamedTuple):
+    """A branch's pipe-sensor model: cooling time constant tau [s] (AS_SIMULATED, a finite value
+    or inf) and the pipe water upstream of the sensor mass [kg]."""
+    tau: float
+    mass: float
+
+
+AS_SIMULATED_FIT = PipeFit(AS_SIMULATED, MASS_RANGE[0])
+
+
+def cooled(t: np.ndarray, fluid: np.ndarray, m_flow: np.ndarray, fit: PipeFit, T_room: float) -> np.ndarray:
+    """The sensor reading: `fluid` renewed by the flow m_flow [kg/s] through fit.mass of pipe water
+    that cools toward T_room with fit.tau (before the first sample: the first fluid value);
     tau = AS_SIMULATED: `fluid` throughout."""
-    if tau == AS_SIMULATED:
+    if fit.tau == AS_SIMULATED:
         return fluid
-    n = len(t)
-    last = np.where(flowing, np.arange(n), 0)
-    np.maximum.accumulate(last, out=last)
-    start = np.nan_to_num(fluid[last], nan=T_room)
-    decay = T_room + (start - T_room) * np.exp(-(t - t[last]) / tau)
-    return np.where(flowing, fluid, decay)
+    decay = 0.0 if math.isinf(fit.tau) else 1.0 / fit.tau
+    return _reading(np.asarray(t, float), np.asarray(fluid, float), np.nan_to_num(np.asarray(m_flow, float)),
+                    float(fit.mass), decay, float(T_room))
+
+
+@njit(cache=True)
+def _reading(t, fluid, m, mass, decay, T_room):
+    out = np.empty(t.size)
+    T = fluid[0] if np.isfinite(fluid[0]) else T_room
+    out[0] = T
+    for k in range(1, t.size):
+        dt = t[k] - t[k - 1]
+        r = min(1.0, max(m[k], 0.0) * dt / mass) if np.isfinite(fluid[k]) else 0.0
+        T = r * fluid[k] + (1.0 - r) * (T_room + (T - T_room) * math.exp(-dt * decay))
+        out[k] = T
+    return out
 
 
 def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
-    modelled reading (cooling toward T_room); tau per branch fitted on the samples up to t_fit
-    (None: no fit, the replay's own value). cols: catalogue name -> column of the signals the
-    replay computes. -> {flow signal: tau}."""
+    modelled reading (cooling toward T_room); tau and mass per branch fitted on the samples up to
+    t_fit at which the branch does not run (None: no fit, the replay's own value). cols: catalogue
+    name -> column of the signals the replay computes. -> {flow signal: PipeFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
-    taus = {}
+    fits = {}
     for flow, sensors in branches().items():
         if flow not in cols or not any(s in cols for s in sensors):
             continue
-        f = np.nan_to_num(out[:, cols[flow]]) > FLOWING
+        m = np.nan_to_num(out[:, cols[flow]])
         sensors = [s for s in sensors if s in cols]
         fluid = {s: out[:, cols[s]].copy() for s in sensors}
         meas = {s: rec.data[s][:n] if rec.has(s) else None for s in sensors}
-        use = fit & ~f
-        tau = AS_SIMULATED
-        if use.sum() >= 10 and any(m is not None for m in meas.values()):
-            tau = _fit_tau(t, f, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None])
+        use = fit & (m <= FLOWING)
+        pf = AS_SIMULATED_FIT
+        if use.sum() >= 10 and any(v is not None for v in meas.values()):
+            pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None])
         for s in sensors:
-            out[:, cols[s]] = cooled(t, fluid[s], f, tau, T_room)
-        taus[flow] = tau
-    return taus
+            out[:, cols[s]] = cooled(t, fluid[s], m, pf, T_room)
+        fits[flow] = pf
+    return fits
 
 
-def _fit_tau(t, flowing, use, T_room, pairs) -> float:
-    """The grid's best, refined within its neighbours on log tau when finite (a continuous fit:
-    a grid step would make every replay's cost jump with it)."""
-    def sse(tau):
-        return sum(float(np.nansum(((m - cooled(t, y, flowing, tau, T_room))[use]) ** 2)) for y, m in pairs)
+def _fit(t, m, use, T_room, pairs) -> PipeFit:
+    """The (tau, mass) grid's best, each refined within its grid neighbours on a log scale when
+    finite (a continuous fit: a grid step would make every replay's cost jump with it)."""
+    def sse(tau, mass):
+        f = PipeFit(tau, mass)
+        return sum(float(np.nansum(((y_m - cooled(t, y, m, f, T_room))[use]) ** 2)) for y, y_m in pairs)
 
-    costs = [sse(tau) for tau in TAU_GRID]
-    k = int(np.argmin(costs))
-    tau = float(TAU_GRID[k])
-    if 0 < tau < math.inf:
-        lo, hi = math.log(TAU_GRID[max(k - 1, 1)]), math.log(TAU_GRID[min(k + 1, len(TAU_GRID) - 2)])
-        res = minimize_scalar(lambda u: sse(math.exp(u)), bounds=(lo, hi), method="bounded",
-                              options={"xatol": 1e-3})
-        if res.fun < costs[k]:
-            tau = float(math.exp(res.x))
-    return tau
+    moves = bool((m[use] > 0).any())   # a mass matters only where the pipe trickles
+    masses = MASS_GRID if moves else MASS_GRID[:1]
+    costs = np.array([[sse(tau, mass) for mass in masses] for tau in TAU_GRID])
+    k, j = np.unravel_index(int(np.argmin(costs)), costs.shape)
+    tau, mass = float(TAU_GRID[k]), float(masses[j])
+    if tau == AS_SIMULATED:
+        return AS_SIMULATED_FIT
+    best = costs[k, j]
+    if tau < math.inf:
+        tau, best = _refine(lambda x: sse(x, mass), TAU_GRID[1:-1], k - 1, tau, best)
+    if moves:
+        mass, best = _refine(lambda x: sse(tau, x), MASS_GRID, j, mass, best)
+    return PipeFit(tau, mass)
 
 
-def at_bound(tau: float) -> bool:
+def _refine(cost, grid, k, x, best) -> tuple:
+    """Brent on log x between grid[k]'s neighbours; -> (x, cost), the grid's when not better."""
+    lo, hi = math.log(grid[max(k - 1, 0)]), math.log(grid[min(k + 1, len(grid) - 1)])
+    res = minimize_scalar(lambda u: cost(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
+    return (float(math.exp(res.x)), float(res.fun)) if res.fun < best else (x, best)
+
+
+def at_bound(fit: PipeFit) -> bool:
     """A cooling time constant on a bound of TAU_RANGE."""
-    return bool(0 < tau < math.inf and min(abs(math.log(tau / b)) for b in TAU_RANGE) < 1e-2)
+    return bool(0 < fit.tau < math.inf and min(abs(math.log(fit.tau / b)) for b in TAU_RANGE) < 1e-2)

@@ -126,9 +126,9 @@ class Replayer:
         # where the lab's storage sensors and ports are (columns file): every run starts from them
         self.lab = {**(rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}), **self._lab_ports()}
         # the end of the training window (diagnose sets it): the pipe sensors' cooling time
-        # constants are fitted up to it (pipe_sensor.py); pipe_tau holds the last run's
+        # models are fitted up to it (pipe_sensor.py); pipe_fit holds the last run's
         self.t_train: float | None = None
-        self.pipe_tau: dict = {}
+        self.pipe_fit: dict = {}
         # the radiator alone's element count and the instances calibrated on their own subsystem
         # (calibrate_radiator): the nominal re-fit leaves those alone
         self.radiator_elements = 5
@@ -264,7 +264,7 @@ class Replayer:
                 out[:, CATALOGUE.index(sig)] = v
         cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
-        self.pipe_tau = pipe_sensor.apply(self.rec, out, cols, n, self._T_room,
+        self.pipe_fit = pipe_sensor.apply(self.rec, out, cols, n, self._T_room,
                                           t_fit if self.t_train is not None else None)
         self._checked = True
         return out
@@ -327,8 +327,8 @@ class Replayer:
         ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith("radiator.")}
         y = cut_mod.replay_radiator(self.rec, self.house_name, ov, len(self.t),
                                     elements or self.radiator_elements)["mixer.T_ret"]
-        tau = self.pipe_tau.get("mixer.m_flow", pipe_sensor.AS_SIMULATED)
-        return pipe_sensor.cooled(self.t, y, self.circuit_flowing(), tau, self._T_room)
+        fit = self.pipe_fit.get("mixer.m_flow", pipe_sensor.AS_SIMULATED_FIT)
+        return pipe_sensor.cooled(self.t, y, self.rec.data["mixer.m_flow"], fit, self._T_room)
 
     def refit_radiator(self, transform, mask: np.ndarray) -> tuple:
         """The radiator alone re-fitted with a sensor candidate's `transform` on its return

@@ -81,20 +81,21 @@ def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
     t = np.arange(0.0, 6 * 3600.0, 60.0)
     flowing = (t % 7200.0) < 2400.0
     fluid = np.full(t.size, 60.0)
-    truth = pipe_sensor.cooled(t, fluid, flowing, 1500.0, 18.0)
+    flow = np.where(flowing, 0.1, 0.0)
+    truth = pipe_sensor.cooled(t, fluid, flow, pipe_sensor.PipeFit(1500.0, 0.1), 18.0)
     stop = np.flatnonzero(flowing[:-1] & ~flowing[1:])[0] + 1
     assert truth[stop - 1] == 60.0 and abs(truth[stop + 24] - (18.0 + 42.0 * np.exp(-1500.0 / 1500.0))) < 1e-9
 
     class Rec:
         time = t
-        data = {"chp.T_sup": truth, "chp.m_flow": np.where(flowing, 0.1, 0.0)}
+        data = {"chp.T_sup": truth, "chp.m_flow": flow}
 
         def has(self, s):
             return s in self.data
 
-    out = np.column_stack([fluid, Rec.data["chp.m_flow"]])
-    taus = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 18.0, t[-1] / 2)
-    assert abs(taus["chp.m_flow"] / 1500.0 - 1.0) < 0.01
+    out = np.column_stack([fluid, flow])
+    fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 18.0, t[-1] / 2)
+    assert abs(fits["chp.m_flow"].tau / 1500.0 - 1.0) < 0.01
     assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
 
 
@@ -103,7 +104,8 @@ def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
     # keeps its pipe at 35 degC (it reads above the room, never below it): the room is 23 degC
     t = np.arange(0.0, 24 * 3600.0, 60.0)
     flowing = (t % (12 * 3600.0)) < 4 * 3600.0
-    chp = pipe_sensor.cooled(t, np.full(t.size, 70.0), flowing, 1500.0, 23.0)
+    chp = pipe_sensor.cooled(t, np.full(t.size, 70.0), np.where(flowing, 0.1, 0.0), pipe_sensor.PipeFit(1500.0, 0.1),
+                             23.0)
 
     class Rec:
         time = t
