@@ -51,7 +51,7 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
-from scipy.optimize import minimize_scalar
+from scipy.optimize import minimize, minimize_scalar
 
 # sensor -> (its branch's flow signal, the command that starts the branch, command threshold)
 STAGNANT_PIPE = {
@@ -190,8 +190,10 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
 
 
 def _fit(t, m, use, T_room, pairs) -> PipeFit:
-    """The (tau, mass) grid's best, each refined within its grid neighbours on a log scale when
-    finite (a continuous fit: a grid step would make every replay's cost jump with it)."""
+    """The (tau, mass) grid's best, refined around it on log scales when finite (a continuous fit:
+    a grid step would make every replay's cost jump with it): tau alone by Brent within its grid
+    neighbours where the pipe only runs or stands, else both together (Nelder-Mead, within the
+    ranges: the two trade off, and one at a time stops short)."""
     def sse(tau, mass):
         f = PipeFit(tau, mass)
         return sum(float(np.nansum(((y_m - cooled(t, y, m, f, T_room))[use]) ** 2)) for y, y_m in pairs)
@@ -203,19 +205,23 @@ def _fit(t, m, use, T_room, pairs) -> PipeFit:
     tau, mass = float(TAU_GRID[k]), float(masses[j])
     if tau == AS_SIMULATED:
         return AS_SIMULATED_FIT
-    best = costs[k, j]
-    if tau < math.inf:
-        tau, best = _refine(lambda x: sse(x, mass), TAU_GRID[1:-1], k - 1, tau, best)
-    if moves:
-        mass, best = _refine(lambda x: sse(tau, x), MASS_GRID, j, mass, best)
-    return PipeFit(tau, mass)
+    if math.isinf(tau):
+        if moves:
+            mass = _refine(lambda x: sse(tau, x), MASS_GRID, j, mass, costs[k, j])
+        return PipeFit(tau, mass)
+    if not moves:
+        return PipeFit(_refine(lambda x: sse(x, mass), TAU_GRID[1:-1], k - 1, tau, costs[k, j]), mass)
+    bounds = [tuple(math.log(b) for b in TAU_RANGE), tuple(math.log(b) for b in MASS_RANGE)]
+    res = minimize(lambda u: sse(math.exp(u[0]), math.exp(u[1])), [math.log(tau), math.log(mass)],
+                   method="Nelder-Mead", bounds=bounds, options={"xatol": 1e-3, "fatol": 1e-9 * costs[k, j]})
+    return PipeFit(*map(math.exp, res.x)) if res.fun < costs[k, j] else PipeFit(tau, mass)
 
 
-def _refine(cost, grid, k, x, best) -> tuple:
-    """Brent on log x between grid[k]'s neighbours; -> (x, cost), the grid's when not better."""
+def _refine(cost, grid, k, x, best) -> float:
+    """Brent on log x between grid[k]'s neighbours; the grid's x when not better."""
     lo, hi = math.log(grid[max(k - 1, 0)]), math.log(grid[min(k + 1, len(grid) - 1)])
     res = minimize_scalar(lambda u: cost(math.exp(u)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-3})
-    return (float(math.exp(res.x)), float(res.fun)) if res.fun < best else (x, best)
+    return float(math.exp(res.x)) if res.fun < best else x
 
 
 def at_bound(fit: PipeFit) -> bool:

@@ -99,6 +99,40 @@ def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
     assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
 
 
+def test_a_trickle_renews_the_pipe_sensor_in_part_and_its_pipe_water_is_fitted():
+    # each 6 h: the branch runs 2 h (0.1 kg/s of 60 degC), trickles 2 h (0.3 g/s of the 45 degC
+    # return header: an idle flow) and stands 2 h; the sensor sits behind 50 g of pipe water
+    t = np.arange(0.0, 12 * 3600.0, 60.0)
+    phase = (t % 21600.0) // 7200.0
+    flow = np.select([phase == 0, phase == 1], [0.1, 3e-4], 0.0)
+    fluid = np.select([phase == 0, phase == 1], [60.0, 45.0], 70.0)   # a standing unit's fluid is stale
+    truth = pipe_sensor.cooled(t, fluid, flow, pipe_sensor.PipeFit(1200.0, 0.05), 20.0)
+    assert np.array_equal(truth[phase == 0][1:], fluid[phase == 0][1:])           # running: the fluid
+    r, e = 3e-4 * 60.0 / 0.05, np.exp(-60.0 / 1200.0)                            # plug-flow steady state
+    end = np.flatnonzero(phase == 1)[-1]
+    assert abs(truth[end] - (20.0 + r * 25.0 / (1.0 - (1.0 - r) * e))) < 0.01   # 42.1 degC, far from the room
+    stand = np.flatnonzero(phase == 2)
+    assert abs(truth[stand[-1]] - (20.0 + (truth[stand[0] - 1] - 20.0) * np.exp(-7200.0 / 1200.0))) < 0.01
+    # continuous in the flow: a flow of 1e-9 kg/s reads as a standing pipe does
+    tiny = pipe_sensor.cooled(t, fluid, np.where(flow > 0.01, flow, np.where(flow > 0, 1e-9, 0.0)),
+                              pipe_sensor.PipeFit(1200.0, 0.05), 20.0)
+    still = pipe_sensor.cooled(t, fluid, np.where(flow > 0.01, flow, 0.0), pipe_sensor.PipeFit(1200.0, 0.05), 20.0)
+    assert np.max(np.abs(tiny - still)) < 1e-3
+
+    class Rec:
+        time = t
+        data = {"chp.T_sup": truth, "chp.m_flow": flow}
+
+        def has(self, s):
+            return s in self.data
+
+    out = np.column_stack([fluid, flow])
+    fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 20.0, t[-1] / 2)
+    fit = fits["chp.m_flow"]
+    assert abs(fit.tau / 1200.0 - 1.0) < 0.02 and abs(fit.mass / 0.05 - 1.0) < 0.05
+    assert np.max(np.abs(out[:, 0] - truth)) < 0.1
+
+
 def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
     # the CHP stands 8 h in a 23 degC room; the boiler stands as long but an unrecorded flow
     # keeps its pipe at 35 degC (it reads above the room, never below it): the room is 23 degC
