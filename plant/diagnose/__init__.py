@@ -119,7 +119,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     rep["mixer_calibration"] = mixer_cal
     rep["pipe_sensors"] = {flow: {"tau_s": f.tau if 0 < f.tau < math.inf else None,
                                   "reading": "cools" if 0 < f.tau < math.inf else "holds" if f.tau else "as simulated",
-                                  "pipe_water_kg": f.mass if f.tau else None,
+                                  "pipe_water_kg": f.mass if f.fitted else None,
                                   "at_bound": pipe_sensor.at_bound(f),
                                   "T_plant_room_degC": rp._T_room,
                                   "T_plant_room_from": rp._T_room_from}

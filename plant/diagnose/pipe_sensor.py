@@ -132,9 +132,11 @@ def plant_room(rec) -> float | None:
 
 class PipeFit(NamedTuple):
     """A branch's pipe-sensor model: cooling time constant tau [s] (AS_SIMULATED, a finite value
-    or inf) and the pipe water upstream of the sensor mass [kg]."""
+    or inf) and the pipe water upstream of the sensor mass [kg] (fitted: the branch trickled in
+    the fit's samples, else the smallest, which only a trickle could tell from any other)."""
     tau: float
     mass: float
+    fitted: bool = False
 
 
 AS_SIMULATED_FIT = PipeFit(AS_SIMULATED, MASS_RANGE[0])
@@ -208,13 +210,13 @@ def _fit(t, m, use, T_room, pairs) -> PipeFit:
     if math.isinf(tau):
         if moves:
             mass = _refine(lambda x: sse(tau, x), MASS_GRID, j, mass, costs[k, j])
-        return PipeFit(tau, mass)
+        return PipeFit(tau, mass, moves)
     if not moves:
         return PipeFit(_refine(lambda x: sse(x, mass), TAU_GRID[1:-1], k - 1, tau, costs[k, j]), mass)
     bounds = [tuple(math.log(b) for b in TAU_RANGE), tuple(math.log(b) for b in MASS_RANGE)]
     res = minimize(lambda u: sse(math.exp(u[0]), math.exp(u[1])), [math.log(tau), math.log(mass)],
                    method="Nelder-Mead", bounds=bounds, options={"xatol": 1e-3, "fatol": 1e-9 * costs[k, j]})
-    return PipeFit(*map(math.exp, res.x)) if res.fun < costs[k, j] else PipeFit(tau, mass)
+    return PipeFit(*map(math.exp, res.x), True) if res.fun < costs[k, j] else PipeFit(tau, mass, True)
 
 
 def _refine(cost, grid, k, x, best) -> float:

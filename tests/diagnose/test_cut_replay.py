@@ -95,7 +95,7 @@ def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
 
     out = np.column_stack([fluid, flow])
     fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 18.0, t[-1] / 2)
-    assert abs(fits["chp.m_flow"].tau / 1500.0 - 1.0) < 0.01
+    assert abs(fits["chp.m_flow"].tau / 1500.0 - 1.0) < 0.01 and not fits["chp.m_flow"].fitted  # no trickle
     assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
 
 
@@ -129,7 +129,7 @@ def test_a_trickle_renews_the_pipe_sensor_in_part_and_its_pipe_water_is_fitted()
     out = np.column_stack([fluid, flow])
     fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 20.0, t[-1] / 2)
     fit = fits["chp.m_flow"]
-    assert abs(fit.tau / 1200.0 - 1.0) < 0.02 and abs(fit.mass / 0.05 - 1.0) < 0.05
+    assert fit.fitted and abs(fit.tau / 1200.0 - 1.0) < 0.02 and abs(fit.mass / 0.05 - 1.0) < 0.05
     assert np.max(np.abs(out[:, 0] - truth)) < 0.1
 
 
