@@ -113,9 +113,7 @@ class Kind:
 
     LINKS maps each link key to (default, meaning); a default of REQUIRED must be given. A kind
     that carries water between others implements the protocol its role needs:
-      generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals; and
-                 emit_running(c, inst) -> expression, true while the unit ran the step before
-                 (an idle flow passes only a standing unit; default: it always stands)
+      generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals
       consumer   emit_consumer(c, inst, T_sup) -> (m_flow, T_return expression for `volumes`)
       emitter    emit_emitter(c, inst, m_flow, T_sup) -> T_return local
     """
@@ -133,11 +131,6 @@ class Kind:
     def emit(self, c, inst) -> None:
         """Code of the instance's own phases (a generator or consumer emits when its coupling
         point calls it)."""
-
-    def emit_running(self, c, inst) -> str:
-        """An expression true while the generator ran the step before (its own pump governs its
-        branch): a kind that does not say is always standing."""
-        return "False"
 
     def stored_energy(self, inst, x: np.ndarray) -> float:
         """Heat held in the instance's water relative to 0 degC [J] (energy ledger)."""

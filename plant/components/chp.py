@@ -282,11 +282,6 @@ class Kind(ComponentKind):
                f"{c.s(inst.name + '.y_set')}, 0.0, {T_in})[0]")
         return m
 
-    def emit_running(self, c, inst) -> str:
-        """Started, in operation or with its pump still running down (state of the step before)."""
-        x, _ = self._views(c, inst)
-        return f"({x}[{X_RUN}] > 0.5 or {x}[{X_MPUMP}] > 0.0)"
-
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         x, p = self._views(c, inst)
         m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))

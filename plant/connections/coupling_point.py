@@ -11,7 +11,6 @@ start-of-step outflow temperatures, so the ledger closes to round-off.
 Effects the ideal switch leaves out, declared per generator (0 = the original's behaviour):
   idle_flow = { chp = 0.3 }       share of the consumers' flow deficit left by the generators
                                   listed before it that returns through its branch (no check valve)
-                                  while the unit stands (its kind's emit_running)
   pump_coupling = { chp = 0.1 }   share of the flow of the generators listed before it pushed
                                   through its branch (suction on a shared header)
   storage_inlet_mixing = 0.05     m3 beyond the port layer over which a storage inflow spreads
@@ -84,9 +83,8 @@ class Kind(ComponentKind):
                     j = 3 + 2 * forced.index(g.name)
                     before = " + ".join(m for m, _ in flows) or "0.0"
                     m_ext = c.var("m_ext")
-                    run = c.kinds[g.kind].emit_running(c, g)
                     c.emit("hydraulics", f"{m_ext} = {hyd}.forced_generator_flows({m_dem}, {before}, "
-                                         f"{p}[{j}], {p}[{j + 1}], {run})")
+                                         f"{p}[{j}], {p}[{j + 1}])")
                 flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
         m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
         ports = c.storage_ports(st.name)

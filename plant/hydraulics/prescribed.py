@@ -7,23 +7,18 @@ the storage top and replaced at the bottom. No flow is ever forced through an id
 
 Interface (shared with a pressure-driven network that may replace this module):
     split(m_generators, m_demand) -> (m_charge, m_discharge)
-    forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share, running) -> m_ext_chp
+    forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share) -> m_ext_chp
 
 The ideal switch forces no flow through a generator (both shares 0, as the original). Two
 lumped parameters let the same switch carry the effects a pressure-driven header produces
 (used by the fit to test hypotheses). Idle-generator flow: when the consumers (heating circuit
 primary + DHW charging) draw more than the boiler delivers, the deficit returns from the return
 to the supply header through every open path in parallel — the storage and the CHP branch, which
-has no check valve; `idle_share` is the CHP's part of that deficit while the CHP stands. A
-running unit's own pump governs its branch (against the few kPa across a hydraulic switch a
-running pump's flow hardly moves); a deficit drawn through a running CHP had pushed it to several
-times its pump's flow during DHW charging and cooled its outlet (labsim's idle_flow_large: the
-twin's CHP heat counter 725 W RMS off with the idle flow fitted, 120 W with it on a standing unit
-only). Pump coupling: a share of the boiler's own flow pushed through the CHP (suction on a
-shared header), running or not. The CHP takes max(own pump flow, forced flow), so a running CHP
-is pushed past its own pump only when the coupled flow is larger. With both shares 0 (the
-default) the result is 0, bit-identical to the ideal switch; the forced flow only changes the
-CHP's flow, so the ledger stays exact.
+has no check valve; `idle_share` is the CHP's part of that deficit. Pump coupling: a share of
+the boiler's own flow pushed through the CHP (suction on a shared header). The CHP takes
+max(own pump flow, forced flow), so a running CHP is pushed past its own pump only when the
+forced flow is larger. With both shares 0 (the default) the result is 0, bit-identical to the
+ideal switch; the forced flow only changes the CHP's flow, so the ledger stays exact.
 """
 from numba import njit
 
@@ -38,8 +33,7 @@ def split(m_generators, m_demand):
 
 
 @njit(cache=True)
-def forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share, running):
-    """Flow [kg/s] the network pushes through the CHP (running: the unit ran the step before)."""
+def forced_generator_flows(m_demand, m_boiler, idle_share, coupling_share):
+    """Flow [kg/s] the network pushes through the CHP."""
     deficit = m_demand - m_boiler
-    idle = 0.0 if running or deficit <= 0.0 else idle_share * deficit
-    return idle + coupling_share * m_boiler
+    return idle_share * (deficit if deficit > 0.0 else 0.0) + coupling_share * m_boiler

@@ -62,27 +62,6 @@ def test_forced_chp_flow_is_seen_by_the_branch_not_by_the_units_counter():
     assert meter < heat  # the unit's counter misses the heat of the flow its pump did not move
 
 
-def test_an_idle_flow_passes_only_a_standing_chp():
-    # the consumers' deficit returns through the CHP branch while the unit stands; once it runs,
-    # its own pump sets its flow (a pump coupling still pushes a running unit)
-    col = {n: CATALOGUE.index(n) for n in ("chp.m_flow", "chp.m_flow_pump", "chp.mode", "chp.Q_flow",
-                                          "chp.Q_flow_meter")}
-    h = load_house("house1", start="2021-01-10", overrides={"switch.idle_flow.chp": 0.8})
-    _, rows = h.run(DAY, dt=1.0, out_interval=60.0)
-    assert h.ledger()["closure"] < 1e-9
-    m, pump, mode = rows[:, col["chp.m_flow"]], rows[:, col["chp.m_flow_pump"]], rows[:, col["chp.mode"]]
-    running = (mode >= 1) & (mode <= 4)
-    standing = mode == 0
-    assert running.sum() > 60 and (standing & (m > 0.0)).sum() > 60     # it runs, and stands flushed
-    assert np.array_equal(m[running], pump[running])
-    heat, meter = rows[running, col["chp.Q_flow"]].sum(), rows[running, col["chp.Q_flow_meter"]].sum()
-    assert abs(meter / heat - 1.0) < 0.01           # running: the unit's counter sees all its heat
-    h = load_house("house1", start="2021-01-10", overrides={"switch.pump_coupling.chp": 0.8})
-    _, rows = h.run(DAY, dt=1.0, out_interval=60.0)
-    running = (rows[:, col["chp.mode"]] >= 1) & (rows[:, col["chp.mode"]] <= 4)
-    assert np.any(rows[running, col["chp.m_flow"]] > rows[running, col["chp.m_flow_pump"]] + 1e-3)
-
-
 def test_bad_inlet_mixing_names_the_key_and_the_range():
     with pytest.raises(ConfigError) as e:
         load_house("house1", overrides={"switch.storage_inlet_mixing": 0.6})
