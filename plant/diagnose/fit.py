@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -218,6 +219,19 @@ def common_mode(ctx, nominal_sim, j):
 LOCAL_GAIN = 0.35
 
 
+class _Tried(NamedTuple):
+    """A sensor candidate fitted on one signal (fit_signal)."""
+    key: tuple           # (local and its share passes LOCAL_GAIN, share of its residual removed)
+    j: int               # column of the signal
+    value: float         # the fitted parameter
+    cost: object         # value -> training MSE on the signal
+    y0: np.ndarray       # the twin's value the effect acts on
+    local: bool          # judged on its own (relative) residual
+    y_before: np.ndarray  # that value before any joint radiator re-fit
+    removed: float       # residual removed [unit^2]
+    tank: str | None     # the storage of a storage sensor
+
+
 def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None) -> Result:
     """Fit a post-processing candidate to each eligible signal; keep the one whose own residual
     it reduces by the largest share on training (a sensor effect explains its sensor's residual
@@ -278,18 +292,19 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         # (a structural bias included): a local one whose share would pass LOCAL_GAIN goes first
         local = c is not None or s in alone
         key = (local and red >= LOCAL_GAIN, red)
-        tried.append((key, j, v, f, y0, local, y_before, J0 - J, s.rpartition(".T_sensor_")[0] if c is not None else None))
+        tried.append(_Tried(key, j, v, f, y0, local, y_before, J0 - J,
+                            s.rpartition(".T_sensor_")[0] if c is not None else None))
     if not tried:
         return Result(effect.id, effect.component, effect.kind, False, "no eligible measured signal",
                       effect=effect)
-    best = max(tried, key=lambda x: x[0])
-    if best[8] is not None and best[0][0]:
+    best = max(tried, key=lambda x: x.key)
+    if best.tank is not None and best.key[0]:
         # among the sensors of that storage that pass, the one whose residual it removes most in
         # K^2: an offset d on one sensor leaves -d/2 on each neighbour's relative residual, which
         # an offset removes as wholly (by the share alone, labsim's +1.5 K on sensor 5 was once
         # fitted as -0.72 K on sensor 6)
-        best = max((x for x in tried if x[8] == best[8] and x[0][0]), key=lambda x: x[7])
-    _, j, v, f, y0, local, y_before, _, _ = best
+        best = max((x for x in tried if x.tank == best.tank and x.key[0]), key=lambda x: x.removed)
+    j, v, f, y0, local, y_before = best.j, best.value, best.cost, best.y0, best.local, best.y_before
     sim = nominal_sim.copy()
     sim[:, j] = effect.apply(t, y0, [v])
     m = ctx.train & ctx.ok[:, j]
