@@ -9,7 +9,6 @@ fit (fit.py) -> judge and select (verdict.py) -> report (report.py). Method and 
 """
 from __future__ import annotations
 
-import math
 import time
 
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, recording_io, replay, search  # noqa: F401
@@ -117,12 +116,11 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
             f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in chosen[1:])
     rep["radiator_calibration"] = radiator_cal
     rep["mixer_calibration"] = mixer_cal
-    rep["pipe_sensors"] = {flow: {"tau_s": f.tau if 0 < f.tau < math.inf else None,
-                                  "reading": "cools" if 0 < f.tau < math.inf else "holds" if f.tau else "as simulated",
-                                  "pipe_water_kg": f.mass if f.fitted else None,
-                                  "at_bound": pipe_sensor.at_bound(f),
-                                  "T_plant_room_degC": rp._T_room,
-                                  "T_plant_room_from": rp._T_room_from}
+    # the nominal twin's fits, and the named model's where a plant effect changed its flows
+    named = final.pipe if final is not None else {}
+    rep["pipe_sensors"] = {flow: {**pipe_sensor.public(f), "T_plant_room_degC": rp._T_room,
+                                  "T_plant_room_from": rp._T_room_from,
+                                  "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in pipe_fit.items()}
     _report.flag_bounds(rep, results)
     if out is not None:

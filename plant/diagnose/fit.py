@@ -51,6 +51,7 @@ class Result:
     at_bound: list = field(default_factory=list)  # fitted parameters that ended on a bound
     local: dict | None = None          # a sensor candidate judged relative to its neighbours (fit_signal)
     nominal: dict = field(default_factory=dict)  # jointly re-fitted nominal parameters
+    pipe: dict = field(default_factory=dict)     # its replay's pipe-sensor fits (pipe_sensor.PipeFit per branch)
 
     def public(self) -> dict:
         return {"id": self.id, "component": self.component if self.signal is None else self.signal,
@@ -175,7 +176,8 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
                train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect,
-               nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **scheme})
+               nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **scheme},
+               pipe=dict(replayer.pipe_fit))
     r.k = len(free)
     return r
 

@@ -56,15 +56,15 @@ def _on_top(r, current, chosen, ctx, replayer):
             return None
         ov.update(own)
         rows = replayer.run(ov)
-        sim = rows[:, ctx.cols]
+        sim, pipe = rows[:, ctx.cols], dict(replayer.pipe_fit)
     else:
-        rows, sim = r.rows, r.sim.copy()
+        rows, sim, pipe = r.rows, r.sim.copy(), r.pipe
     for c in sensors:
         j = ctx.measured.index(c.signal)
         sim[:, j] = current[:, j]
     out = fit.Result(r.id, r.component, r.kind, True, theta=list(r.theta), stderr=list(r.stderr),
                      train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
-                     evaluations=1, sim=sim, rows=rows, effect=r.effect, nominal=dict(r.nominal))
+                     evaluations=1, sim=sim, rows=rows, effect=r.effect, nominal=dict(r.nominal), pipe=pipe)
     out.k = r.k
     return out
 
@@ -125,11 +125,12 @@ def _refit_sensors(chosen, plant, ctx) -> list:
 def final(chosen):
     """The diagnosed model as one Result: the named effect with its values in the model that
     holds every chosen effect (fitted again when a plant effect joined), that model's simulation,
-    and the rows of its last plant replay (None: sensor effects only, the heat flows are the
-    nominal's)."""
+    and the rows and pipe-sensor fits of its last plant replay (None and {}: sensor effects only,
+    the heat flows are the nominal's)."""
     f = copy.copy(chosen[0])
     f.sim = chosen[-1].sim
-    f.rows = next((c.rows for c in reversed(chosen) if c.kind == "simulate" and c.rows is not None), None)
+    last = next((c for c in reversed(chosen) if c.kind == "simulate" and c.rows is not None), None)
+    f.rows, f.pipe = (last.rows, last.pipe) if last is not None else (None, {})
     return f
 
 

@@ -226,6 +226,14 @@ def _refine(cost, grid, k, x, best) -> float:
     return float(math.exp(res.x)) if res.fun < best else x
 
 
+def public(fit: PipeFit) -> dict:
+    """report.json's entry of a branch's fit."""
+    cools = 0 < fit.tau < math.inf
+    return {"tau_s": fit.tau if cools else None,
+            "reading": "cools" if cools else "holds" if fit.tau else "as simulated",
+            "pipe_water_kg": fit.mass if fit.fitted else None, "at_bound": at_bound(fit)}
+
+
 def at_bound(fit: PipeFit) -> bool:
     """A cooling time constant on a bound of TAU_RANGE."""
     return bool(0 < fit.tau < math.inf and min(abs(math.log(fit.tau / b)) for b in TAU_RANGE) < 1e-2)

@@ -79,3 +79,9 @@ def test_a_lagging_top_sensor_and_an_idle_chp_that_keeps_flowing_are_both_named(
     assert effects["idle_generator_flow"]["parameters"]["idle_flow_chp"]["value"] > 0.2
     # the report's "after" holds both: the signals the idle flow moves count among the affected
     assert {"storage.T_sensor_10", "chp.T_ret"} <= set(rep["affected_signals"])
+    # at night the idle flow is a trickle of tenths of a g/s: the CHP's pipe sensors read it in part
+    # (a pipe-water mass fitted in the named model), not as a standing pipe that cools
+    named = rep["pipe_sensors"]["chp.m_flow"]["named_model"]
+    assert named is not None and named["pipe_water_kg"] is not None, rep["pipe_sensors"]
+    sup = rep["signals"]["chp.T_sup"]
+    assert sup["heldout_rmse_after"] < 0.6 * sup["heldout_rmse_before"], sup
