@@ -75,6 +75,25 @@ def test_pipe_sensors_are_scored_except_where_their_branch_switches():
     assert mask[:, 2].all()                                    # a storage sensor is always scored
 
 
+class _Rec:
+    """The part of a recording the pipe-sensor model reads: times and signals."""
+
+    def __init__(self, time, data):
+        self.time, self.data = time, data
+
+    def has(self, s):
+        return s in self.data
+
+
+def _fit_chp_pipe(t, measured, fluid, flow, T_room):
+    """The CHP supply sensor's modelled reading of `fluid` at `flow`, fitted to `measured` over
+    the first half: -> (reading, PipeFit)."""
+    out = np.column_stack([fluid, flow])
+    fits = pipe_sensor.apply(_Rec(t, {"chp.T_sup": measured, "chp.m_flow": flow}), out,
+                             {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, T_room, t[-1] / 2)
+    return out[:, 0], fits["chp.m_flow"]
+
+
 def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
     # the recorded reading of a stagnant pipe follows Newton cooling with tau = 1500 s; the
     # replay's reading is fitted on the training samples to that tau
@@ -86,17 +105,9 @@ def test_a_stagnant_pipe_sensor_cools_toward_the_plant_room_and_tau_is_fitted():
     stop = np.flatnonzero(flowing[:-1] & ~flowing[1:])[0] + 1
     assert truth[stop - 1] == 60.0 and abs(truth[stop + 24] - (18.0 + 42.0 * np.exp(-1500.0 / 1500.0))) < 1e-9
 
-    class Rec:
-        time = t
-        data = {"chp.T_sup": truth, "chp.m_flow": flow}
-
-        def has(self, s):
-            return s in self.data
-
-    out = np.column_stack([fluid, flow])
-    fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 18.0, t[-1] / 2)
-    assert abs(fits["chp.m_flow"].tau / 1500.0 - 1.0) < 0.01 and not fits["chp.m_flow"].fitted  # no trickle
-    assert np.max(np.abs(out[:, 0] - truth)) < 0.1 and np.all(out[flowing, 0] == 60.0)
+    out, fit = _fit_chp_pipe(t, truth, fluid, flow, 18.0)
+    assert abs(fit.tau / 1500.0 - 1.0) < 0.01 and not fit.fitted  # no trickle: no pipe water fitted
+    assert np.max(np.abs(out - truth)) < 0.1 and np.all(out[flowing] == 60.0)
 
 
 def test_a_trickle_renews_the_pipe_sensor_in_part_and_its_pipe_water_is_fitted():
@@ -119,18 +130,9 @@ def test_a_trickle_renews_the_pipe_sensor_in_part_and_its_pipe_water_is_fitted()
     still = pipe_sensor.cooled(t, fluid, np.where(flow > 0.01, flow, 0.0), pipe_sensor.PipeFit(1200.0, 0.05), 20.0)
     assert np.max(np.abs(tiny - still)) < 1e-3
 
-    class Rec:
-        time = t
-        data = {"chp.T_sup": truth, "chp.m_flow": flow}
-
-        def has(self, s):
-            return s in self.data
-
-    out = np.column_stack([fluid, flow])
-    fits = pipe_sensor.apply(Rec(), out, {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, 20.0, t[-1] / 2)
-    fit = fits["chp.m_flow"]
+    out, fit = _fit_chp_pipe(t, truth, fluid, flow, 20.0)
     assert fit.fitted and abs(fit.tau / 1200.0 - 1.0) < 0.02 and abs(fit.mass / 0.05 - 1.0) < 0.05
-    assert np.max(np.abs(out[:, 0] - truth)) < 0.1
+    assert np.max(np.abs(out - truth)) < 0.1
 
 
 def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
@@ -141,17 +143,11 @@ def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
     chp = pipe_sensor.cooled(t, np.full(t.size, 70.0), np.where(flowing, 0.1, 0.0), pipe_sensor.PipeFit(1500.0, 0.1),
                              23.0)
 
-    class Rec:
-        time = t
-        data = {"chp.T_sup": chp, "chp.m_flow": np.where(flowing, 0.1, 0.0),
-                "boiler.T_sup": np.where(flowing, 70.0, 35.0), "boiler.m_flow": np.where(flowing, 0.2, 0.0)}
-
-        def has(self, s):
-            return s in self.data
-
-    assert abs(pipe_sensor.plant_room(Rec()) - 23.0) < 0.01
-    Rec.data["chp.m_flow"] = Rec.data["boiler.m_flow"] = np.full(t.size, 0.1)  # nothing stands 6 h
-    assert pipe_sensor.plant_room(Rec()) is None
+    rec = _Rec(t, {"chp.T_sup": chp, "chp.m_flow": np.where(flowing, 0.1, 0.0),
+                   "boiler.T_sup": np.where(flowing, 70.0, 35.0), "boiler.m_flow": np.where(flowing, 0.2, 0.0)})
+    assert abs(pipe_sensor.plant_room(rec) - 23.0) < 0.01
+    rec.data["chp.m_flow"] = rec.data["boiler.m_flow"] = np.full(t.size, 0.1)  # nothing stands 6 h
+    assert pipe_sensor.plant_room(rec) is None
 
 
 def test_guideline_14_hourly_figures_follow_their_formula():
