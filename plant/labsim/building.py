@@ -51,7 +51,8 @@ class MixingStation:
 class Radiator:
     NODES, MASS, Q_N, DT_N, EXP = 3, 120.0, 8778.0, 31.5, 1.3
 
-    def __init__(self, T0: float = 30.0):
+    def __init__(self, T0: float = 30.0, Q_N: float = Q_N, mass: float = MASS):
+        self.Q_N, self.MASS = Q_N, mass
         self.T = [T0] * self.NODES
         self.Q = 0.0
 

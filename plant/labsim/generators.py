@@ -11,6 +11,8 @@ heat withheld during warm-up and given back in the pump run-on) are the remainde
 """
 from __future__ import annotations
 
+import math
+
 from .products import boiler_tables, chp_tables
 
 CP = 4180.0
@@ -180,4 +182,19 @@ def outlet(T_in: float, heat: float, q: float) -> tuple[float, float]:
     return T_in + heat / (CP * q), heat
 
 
-__all__ = ["CHP", "Boiler", "outlet", "CP"]
+def massive_outlet(T_node: float, C: float, T_in: float, heat: float, q: float,
+                   dt: float) -> tuple[float, float, float]:
+    """A generator whose water and metal (C [J/K]) form one mixed node on its outlet, over dt:
+    (node temperature after, mean outlet temperature, heat given to the water [W]). Exact for
+    constant heat and flow (exponential approach to T_in + heat / (q c)), so any C and step are
+    stable; what leaves with the water is the heat put in less the node's change of heat."""
+    if q < 1e-6:
+        return T_node + heat * dt / C, T_node, 0.0
+    g = q * CP
+    T_eq = T_in + heat / g
+    T_new = T_eq + (T_node - T_eq) * math.exp(-g * dt / C)
+    Q_water = heat - C * (T_new - T_node) / dt
+    return T_new, T_in + Q_water / g, Q_water
+
+
+__all__ = ["CHP", "Boiler", "outlet", "massive_outlet", "CP"]

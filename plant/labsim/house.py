@@ -19,6 +19,12 @@ stored heat (tanks, headers, radiator water).
   valve_leak        share of the circuit flow the closed mixing valve still passes
   coil_factor       x the DHW coil's UA (nominal 640 W/K)
   boiler_heat_factor  x the boiler's heat at the same fuel
+
+`nuisance` (nuisance.py) is the rig itself: sensor, port and coil positions, sleeve and pipe
+lags, header and generator masses, radiator rating; `nuisance.draw(R)` gives realisation R's
+(0: the nominal rig). A generator with a thermal mass C (water and metal on its outlet) is a
+mixed node advanced exactly over the step at its flow (`massive_outlet`); its outlet reading is
+the step's mean, so what enters the header is what the node gave up.
 """
 from __future__ import annotations
 
@@ -27,16 +33,14 @@ from profiles import loaders
 
 from .building import Building, MixingStation, Radiator
 from .control import L_MIN, Supervisor, Thermostat
-from .generators import CP, CHP, Boiler, outlet
+from . import nuisance as _nuisance
+from .generators import CP, CHP, Boiler, massive_outlet, outlet
 from .network import Branch, Network
+from .nuisance import DHW_SENSOR_HEIGHTS, STORAGE_PORT_HEIGHTS, STORAGE_SENSOR_HEIGHTS
 from .sensors import Sensor
 from .storage import Tank, coil_heat
 
-STORAGE_SENSOR_HEIGHTS = (0.12, 0.27, 0.42, 0.57, 0.72, 0.87, 1.02, 1.17, 1.32, 1.50)  # m, 1.63 m tank
-DHW_SENSOR_HEIGHTS = {1: 0.10, 5: 0.70, 10: 1.40}  # m, 1.51 m tank
-STORAGE_PORT_HEIGHTS = {"top": 1.55, "bottom": 0.08}  # m: where the switch's flows enter and leave
 R_STORAGE = 2500.0     # Pa/(kg/s)^2
-HEADER_KG = 20.0
 T_COLD, T_TAP = 10.0, 45.0
 DEFAULT_EFFECTS = {"idle_flow_k": 0.0, "storage_UA": 20.0, "plume_litres": 0.0, "sensor_lag": {},
                    "sensor_offset": {}, "sensor_delay": {}, "valve_leak": 0.0, "coil_factor": 1.0,
@@ -47,29 +51,36 @@ TEMPERATURE_TAGS = ([f"TS_S_TM_BT_{i}" for i in range(1, 11)] + [f"WWS_S_TM_BT_{
 
 
 class LabHouse:
-    def __init__(self, start: str = "2021-01-10", effects: dict | None = None, dt: float = 10.0):
+    def __init__(self, start: str = "2021-01-10", effects: dict | None = None, dt: float = 10.0,
+                 nuisance: dict | None = None):
         e = {**DEFAULT_EFFECTS, **(effects or {})}
         unknown = set(e) - set(DEFAULT_EFFECTS)
         if unknown:
             raise ValueError(f"unknown labsim effects: {sorted(unknown)}")
-        self.effects, self.dt, self.t = e, dt, 0.0
+        nz = {**_nuisance.NOMINAL, **(nuisance or {})}
+        if set(nz) != set(_nuisance.NOMINAL):
+            raise ValueError(f"unknown labsim nuisance keys: {sorted(set(nz) - set(_nuisance.NOMINAL))}")
+        UA = e["storage_UA"] if effects and "storage_UA" in effects else nz["storage_UA"]
+        self.effects, self.nuisance, self.dt, self.t = e, nz, dt, 0.0
         self.offset = loaders.start_offset(start)
         self.weather = loaders.weather()
         self.presence = loaders.presence()
         self.household = loaders.electricity(6500.0)
         self.draws = loaders.hot_water(300.0)
         self.chp, self.boiler = CHP(), Boiler(e["boiler_heat_factor"])
-        self.storage = Tank(0.8, 1.63, 50, e["storage_UA"], 18.0, 45.0, 70.0)
+        self.storage = Tank(0.8, 1.63 / nz["storage_diameter_factor"] ** 2, 50, UA, 18.0, 45.0, 70.0)
         self.dhw = Tank(0.5, 1.51, 30, 7.0, 18.0, 40.0, 60.0)
         plume = max(1, int(round(e["plume_litres"] / (self.storage.M)))) if e["plume_litres"] > 0 else 1
         self.plume_litres_applied = plume * self.storage.M  # whole layers: 120 l asked is 8 x 16 l
-        top, bottom = STORAGE_PORT_HEIGHTS["top"], STORAGE_PORT_HEIGHTS["bottom"]
+        top, bottom = nz["port_top"], nz["port_bottom"]
         self.w_top = self.storage.spread(top, plume, downward=True)
         self.w_bottom = self.storage.spread(bottom, plume, downward=False)
         self.top, self.bottom = self.storage.layer(top), self.storage.layer(bottom)
-        self.coil = range(self.dhw.layer(0.75), self.dhw.layer(1.21) + 1)
-        self.coil_UA = 640.0 * e["coil_factor"]
-        self.mixer, self.radiator, self.building = MixingStation(e["valve_leak"]), Radiator(30.0), Building()
+        self.coil = range(self.dhw.layer(nz["coil_bottom"]), self.dhw.layer(nz["coil_top"]) + 1)
+        self.coil_UA = nz["coil_UA"] * e["coil_factor"]
+        self.mixer, self.building = MixingStation(e["valve_leak"]), Building()
+        self.radiator = Radiator(30.0, nz["radiator_Q_N"], nz["radiator_mass"])
+        self.header_kg, self.chp_C, self.boiler_C = nz["header_kg"], nz["chp_C"], nz["boiler_C"]
         k = e["idle_flow_k"]
         self.net = Network([
             Branch("chp", 5000.0, r_idle=R_STORAGE / k**2 if k > 0 else 2e5,
@@ -79,11 +90,13 @@ class LabHouse:
             Branch("dhw", 30000.0, consumer=True),
         ], R_STORAGE)
         self.T_S, self.T_R = 55.0, 40.0
+        self.T_chp_node = self.T_b_node = self.T_R  # the generators' water and metal (used when C > 0)
         self.sup, self.thermostat = Supervisor(), Thermostat()
         self.sensors = {tag: Sensor(40.0, tau=120.0 if tag == "ZONE_S_TM_ROOM" else 60.0 if tag == "WS_TM_AIR"
-                                    else 15.0, extra_tau=e["sensor_lag"].get(tag, 0.0),
+                                    else nz["well_tau"], extra_tau=e["sensor_lag"].get(tag, 0.0),
                                     offset=e["sensor_offset"].get(tag, 0.0), delay=e["sensor_delay"].get(tag, 0.0),
-                                    dt=dt) for tag in TEMPERATURE_TAGS}
+                                    dt=dt, T_room=nz["plant_room"], tau_stagnant=nz["pipe_tau"])
+                        for tag in TEMPERATURE_TAGS}
         self.flows = {"chp": 0.0, "boiler": 0.0, "mixer": 0.0, "dhw": 0.0, "storage": 0.0}
         self.out = {}
         self.ledger = {k: 0.0 for k in ("fuel", "electricity", "generator_losses", "heat_generators",
@@ -106,7 +119,8 @@ class LabHouse:
 
     def stored(self) -> float:
         return (self.storage.energy() + self.dhw.energy() + self.radiator.energy()
-                + HEADER_KG * CP * (self.T_S + self.T_R))
+                + self.header_kg * CP * (self.T_S + self.T_R)
+                + self.chp_C * self.T_chp_node + self.boiler_C * self.T_b_node)
 
     # --- one step -----------------------------------------------------------------------------
     def step(self) -> None:
@@ -129,8 +143,16 @@ class LabHouse:
         f = self.net.solve()
         f["storage"] = f["chp"] + f["boiler"] - f["mixer"] - f["dhw"]  # exact mass balance
         q_st = f["storage"]
-        T_chp, Q_chp = outlet(T_R, self.chp.P_heat, f["chp"])
-        T_b, Q_b = outlet(T_R, self.boiler.P_heat, f["boiler"])
+        if self.chp_C > 0.0:
+            self.T_chp_node, T_chp, Q_chp = massive_outlet(self.T_chp_node, self.chp_C, T_R, self.chp.P_heat,
+                                                           f["chp"], dt)
+        else:
+            T_chp, Q_chp = outlet(T_R, self.chp.P_heat, f["chp"])
+        if self.boiler_C > 0.0:
+            self.T_b_node, T_b, Q_b = massive_outlet(self.T_b_node, self.boiler_C, T_R, self.boiler.P_heat,
+                                                     f["boiler"], dt)
+        else:
+            T_b, Q_b = outlet(T_R, self.boiler.P_heat, f["boiler"])
         # heating circuit
         T_mix = self.mixer.supply(f["mixer"], T_S, T_rad)
         Q_rad = self.radiator.step(dt, m_sec, T_mix, self.building.T_air)
@@ -150,8 +172,8 @@ class LabHouse:
         out_S = f["mixer"] + f["dhw"] + max(q_st, 0.0)
         in_R = f["mixer"] * T_rad + f["dhw"] * T_coil + (q_st * T_out_st if q_st > 0 else 0.0)
         out_R = f["chp"] + f["boiler"] + max(-q_st, 0.0)
-        self.T_S = T_S + dt * (in_S - out_S * T_S) / HEADER_KG
-        self.T_R = T_R + dt * (in_R - out_R * T_R) / HEADER_KG
+        self.T_S = T_S + dt * (in_S - out_S * T_S) / self.header_kg
+        self.T_R = T_R + dt * (in_R - out_R * T_R) / self.header_kg
         self.building.step(dt, Q_rad, b["T_air"], b["presence"], b["P_el"], b["E_glob"])
         # ledger
         L = self.ledger
@@ -159,10 +181,13 @@ class LabHouse:
         el = max(self.chp.P_el, 0.0)
         L["fuel"] += fuel * dt
         L["electricity"] += el * dt
-        L["heat_chp"] += Q_chp * dt
-        L["heat_boiler"] += Q_b * dt
-        L["heat_generators"] += (Q_chp + Q_b) * dt
-        L["generator_losses"] += (fuel - el - Q_chp - Q_b) * dt
+        # a generator with a thermal mass puts its heat into that mass (counted in stored())
+        H_chp = self.chp.P_heat if self.chp_C > 0.0 else Q_chp
+        H_b = self.boiler.P_heat if self.boiler_C > 0.0 else Q_b
+        L["heat_chp"] += H_chp * dt
+        L["heat_boiler"] += H_b * dt
+        L["heat_generators"] += (H_chp + H_b) * dt
+        L["generator_losses"] += (fuel - el - H_chp - H_b) * dt
         L["heat_building"] += Q_rad * dt
         L["heat_dhw"] += Q_dhw * dt
         L["losses_tanks"] += (self.storage.loss + self.dhw.loss) * dt
@@ -180,8 +205,10 @@ class LabHouse:
             o.update(T_chp=self.T_R, T_b=self.T_R, T_mix=self.radiator.T_ret, T_rad_ret=self.radiator.T_ret,
                      T_air=self.boundary(0.0)["T_air"], T_chp_in=self.T_R, T_b_in=self.T_R)
         chp_on, b_on, circ = f["chp"] > 1e-4, f["boiler"] > 1e-4, self.mixer.m_sec > 0
-        fluid = {f"TS_S_TM_BT_{i}": (self.storage.at(h), True) for i, h in enumerate(STORAGE_SENSOR_HEIGHTS, 1)}
-        fluid.update({f"WWS_S_TM_BT_{i}": (self.dhw.at(h), True) for i, h in DHW_SENSOR_HEIGHTS.items()})
+        nz = self.nuisance
+        fluid = {f"TS_S_TM_BT_{i}": (self.storage.at(h), True)
+                 for i, h in enumerate(nz["storage_sensor_heights"], 1)}
+        fluid.update({f"WWS_S_TM_BT_{i}": (self.dhw.at(h), True) for i, h in nz["dhw_sensor_heights"].items()})
         fluid.update({"CHP_S_TM_VL": (o["T_chp"], chp_on), "CHP_S_TM_RL": (o["T_chp_in"], chp_on),
                       "CB_S_TM_VL": (o["T_b"], b_on), "CB_S_TM_RL": (o["T_b_in"], b_on),
                       "HK_S_TM_VL": (o["T_mix"], circ), "HK_S_TM_RL": (o["T_rad_ret"], circ),

@@ -24,6 +24,7 @@ import numpy as np
 from profiles.recording import write_csv
 
 from .control import L_MIN
+from . import nuisance
 from .house import DHW_SENSOR_HEIGHTS, STORAGE_PORT_HEIGHTS, STORAGE_SENSOR_HEIGHTS, LabHouse
 from .sensors import Daq
 
@@ -110,9 +111,10 @@ def _write_columns(path, start, name, ports: bool = True):
 
 
 def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str, truth: dict,
-           command: str | None = None, ports: bool = True) -> dict:
+           command: str | None = None, ports: bool = True, realisation: int = 0) -> dict:
     """Run `house` for `days` and write recording.csv, columns.toml and meta.json into `out`
-    (ports: declare the storage's port heights in columns.toml)."""
+    (ports: declare the storage's port heights in columns.toml; the datasheet's heights whatever
+    the rig's realisation, which meta.json holds)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed + 1000)
@@ -150,6 +152,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
             "storage_sensor_heights_m": dict(zip([f"TS_S_TM_BT_{i}" for i in range(1, 11)], STORAGE_SENSOR_HEIGHTS)),
             "dhw_sensor_heights_m": {f"WWS_S_TM_BT_{i}": h for i, h in DHW_SENSOR_HEIGHTS.items()},
             "storage_port_heights_m": STORAGE_PORT_HEIGHTS, "ports_declared": ports,
+            **({"realisation": realisation, "nuisance": nuisance.public(house.nuisance)} if realisation else {}),
             "instruments": {"temperature": "thermowell lag 15 s (room 120 s, outdoor 60 s), stagnant pipe "
                             "cools to 20 degC (1200 s), DAQ noise 0.05 K, 0.1 K steps",
                             "flow": "1 % noise, cut-off 0.2 l/min, 0.1 l/min steps; no meter in the CHP branch",

@@ -23,8 +23,10 @@ TAU_STAGNANT = 1200.0
 
 class Sensor:
     def __init__(self, T0: float, tau: float = 15.0, extra_tau: float = 0.0, offset: float = 0.0,
-                 delay: float = 0.0, dt: float = 10.0):
+                 delay: float = 0.0, dt: float = 10.0, T_room: float = T_PLANT_ROOM,
+                 tau_stagnant: float = TAU_STAGNANT):
         self.tau, self.extra_tau, self.offset = tau, extra_tau, offset
+        self.T_room, self.tau_stagnant = T_room, tau_stagnant
         self.pipe = T0      # water at the sensor (follows the stagnant pipe when nothing flows)
         self.well = T0      # thermowell temperature
         self.slow = T0      # after the extra lag
@@ -43,7 +45,7 @@ class Sensor:
         if flowing:
             self.pipe = T_fluid
         else:
-            self.pipe += (T_PLANT_ROOM - self.pipe) * (1.0 - math.exp(-dt / TAU_STAGNANT))
+            self.pipe += (self.T_room - self.pipe) * (1.0 - math.exp(-dt / self.tau_stagnant))
         self.well += (self.pipe - self.well) * (1.0 - math.exp(-dt / self.tau))
         self.slow = self.well if self.extra_tau <= 0 else \
             self.slow + (self.well - self.slow) * (1.0 - math.exp(-dt / self.extra_tau))

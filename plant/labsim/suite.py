@@ -1,12 +1,14 @@
 """The public suite of `twin diagnose` made by labsim: cases with known answers.
 
     python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N]
-                                 [--no-ports] [--list]
+                                 [--no-ports] [--realisation R] [--list]
 
 writes DIR/<case>/ (recording.csv, columns.toml, meta.json) per case; columns.toml declares the
 storage's sensor and port heights as a lab knows them from its tank's datasheet (--no-ports: the
 port heights left out, so the twin keeps its own); meta.json holds the truth:
-the case, its effects and sizes, and `expected`, the diagnosis outcomes counted as correct (an
+the case, its effects and sizes, the rig's realisation (--realisation R >= 1: model-form
+variations drawn by plant/labsim/nuisance.py, the same rig for every case of R; 0: the nominal
+rig) and `expected`, the diagnosis outcomes counted as correct (an
 effect id of plant/diagnose/effects, or a verdict: no_missing_physics, unexplained_mismatch).
 
 Cases: the lab as labsim models it with no effect; each catalogue effect the diagnosis knows
@@ -21,6 +23,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import nuisance
 from .house import LabHouse
 from .recording import record
 
@@ -72,18 +75,20 @@ CASES: dict[str, tuple[str, dict, list[str], dict]] = {
 
 
 def make_case(case: str, out: str | Path, days: float = 7.0, start: str = "2021-01-10",
-              seed: int | None = None, command: str | None = None, ports: bool = True) -> dict:
+              seed: int | None = None, command: str | None = None, ports: bool = True,
+              realisation: int = 0) -> dict:
     """Simulate one case and write its recording directory `out`; returns meta.json's content
-    (ports=False: columns.toml does not declare the storage's port heights)."""
+    (ports=False: columns.toml does not declare the storage's port heights; realisation R >= 1:
+    the rig differs from its datasheet as nuisance.draw(R) says)."""
     if case not in CASES:
         raise KeyError(f"case {case!r}: unknown; known: {', '.join(CASES)}")
     desc, effects, expected, sizes = CASES[case]
     seed = list(CASES).index(case) + 1 if seed is None else seed
-    house = LabHouse(start, effects)
+    house = LabHouse(start, effects, nuisance=nuisance.draw(realisation))
     if "plume_litres" in sizes:  # the plume the tank applies: whole layers
         sizes = {**sizes, "plume_litres_applied": house.plume_litres_applied}
     truth = {"case": case, "description": desc, "effects": effects, "sizes": sizes, "expected": expected}
-    return record(house, out, days, seed, start, truth, command, ports)
+    return record(house, out, days, seed, start, truth, command, ports, realisation)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,6 +100,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, help="noise seed of every case (default: each case its own)")
     p.add_argument("--case", nargs="+", action="extend", help="case names (default: all; repeatable)")
     p.add_argument("--no-ports", action="store_true", help="leave the storage's port heights out of columns.toml")
+    p.add_argument("--realisation", type=int, default=0,
+                   help="the rig's model-form variations (0: nominal; R >= 1: drawn, see nuisance.py)")
     p.add_argument("--list", action="store_true", help="list the cases and exit")
     a = p.parse_args(argv)
     if a.list or a.out is None:
@@ -106,8 +113,10 @@ def main(argv: list[str] | None = None) -> int:
             print(f"unknown case {case!r}; --list shows them", file=sys.stderr)
             return 2
         cmd = (f"python -m plant.labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
-               + (f" --seed {a.seed}" if a.seed is not None else "") + (" --no-ports" if a.no_ports else ""))
-        m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd, ports=not a.no_ports)
+               + (f" --seed {a.seed}" if a.seed is not None else "") + (" --no-ports" if a.no_ports else "")
+               + (f" --realisation {a.realisation}" if a.realisation else ""))
+        m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd, ports=not a.no_ports,
+                      realisation=a.realisation)
         print(f"{case:<24} {m['rows']} rows, closure {m['ledger_closure']:.1e}, "
               f"{m['generation_wall_s']:.1f} s  {m['effect_size']}", flush=True)
     return 0
