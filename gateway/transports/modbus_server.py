@@ -15,7 +15,14 @@ Two things pymodbus cannot do through `action` are done in a request-handler sub
   * per-request context (client address, the real bit count of coil reads) and the per-device
     function-code whitelist, checked before pymodbus touches the datastore;
   * link faults (silent, late, dropped connection, corrupted RTU CRC), the per-device FC43/14
-    identification (pymodbus keeps one global identity), and silence for unknown unit ids;
+    identification (pymodbus keeps one global identity), and unknown unit ids (TCP: exception
+    0x0B, gateway target device failed to respond; RTU: silence, another slave's address);
+  * pipelined Modbus TCP requests (several frames in one segment, or a frame's head behind
+    another): pymodbus 3.16's handler decodes one frame per received segment, keeps only the
+    last request (`last_pdu`) for its deferred `handle_later`, and its `send()` empties the
+    receive buffer, so frames behind the first were never answered. Here every frame of a
+    segment is decoded and queued, `handle_later` answers the queue in order, and a TCP answer
+    leaves the receive buffer alone;
   * limits (connections beyond `max_connections` closed at once, silent ones after `idle_timeout`)
     and malformed frames, counted and consumed one by one before pymodbus sees them (TrafficLog).
 The server loop runs in its own thread (gateway/event_loop.py ServerThread); Device calls are
@@ -27,6 +34,7 @@ import asyncio
 import contextvars
 import logging
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -94,6 +102,8 @@ class _Handler(ServerRequestHandler):
         self._peer_known = False
         self._last_rx = time.monotonic()
         self._idle: asyncio.TimerHandle | None = None
+        #: decoded requests waiting for handle_later, in arrival order (one call_soon each)
+        self._queue: deque[Any] = deque()
 
     def _client(self) -> str:
         if self._peer is None or not self._peer_known:
@@ -148,10 +158,11 @@ class _Handler(ServerRequestHandler):
 
     def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
         """Malformed frames are counted and consumed here one by one (pymodbus's framer cannot
-        resynchronise after a bad MBAP header); a well-formed one goes on to pymodbus, which
-        serves one request per connection at a time."""
+        resynchronise after a bad MBAP header); each well-formed one goes on to pymodbus's
+        decoder and into the queue, so every complete frame of a segment is answered (pymodbus
+        alone decodes the first and leaves the rest until the next segment arrives)."""
         if self.server.gw_kind != "tcp":
-            used = super().callback_data(data, addr)
+            used = self._decode(data, addr)
             if used and not self.last_pdu:   # pymodbus dropped it: a CRC or a decoding failure
                 crc_ok = used > 2 and FramerRTU.check_CRC(data[:used - 2], int.from_bytes(data[used - 2:used], "big"))
                 self._malformed("undecodable PDU" if crc_ok else "bad CRC", data[:used])
@@ -163,24 +174,43 @@ class _Handler(ServerRequestHandler):
                 break   # wait for the rest
             frame, used = data[used:used + size], used + size
             if problem is None:
-                super().callback_data(frame, addr)
+                self._decode(frame, addr)
                 if self.last_pdu:
-                    break
+                    continue
                 problem = "undecodable PDU"
             self._malformed(problem, frame)
-            device = self.server.gw_devices.get(frame[6]) if problem == "unknown function code" else None
-            if device is not None and device.link.mode == "none":
+            if problem != "unknown function code":
+                continue
+            tid = (frame[0] << 8) | frame[1]
+            device = self.server.gw_devices.get(frame[6])
+            if device is None:
+                self._no_target(frame[7], frame[6], tid)
+            elif device.link.mode == "none":
                 self.server_send(ExceptionResponse(frame[7], ExcCodes.ILLEGAL_FUNCTION, device_id=frame[6],
-                                                   transaction=(frame[0] << 8) | frame[1]), addr)
-        self.recv_buffer = data   # pymodbus's send() empties it; the caller cuts `used` off it
+                                                   transaction=tid), addr)
         return used
+
+    def _decode(self, frame: bytes, addr: tuple | None) -> int:
+        """pymodbus decodes one request off `frame` into last_pdu and schedules one handle_later;
+        the request is queued for it, so a later frame replacing last_pdu loses nothing."""
+        used = super().callback_data(frame, addr)
+        if self.last_pdu:
+            self._queue.append(self.last_pdu)
+        return used
+
+    def _no_target(self, fc: int, unit: int, tid: int) -> None:
+        """Modbus TCP: exception 0x0B (gateway target device failed to respond) for a unit id that
+        nothing serves, as a Modbus gateway answers (Modbus Application Protocol §7)."""
+        self.server_send(ExceptionResponse(fc & 0x7F, ExcCodes.GATEWAY_NO_RESPONSE, device_id=unit,
+                                           transaction=tid), None)
 
     def handle_later(self) -> None:
         """pymodbus passes every request through run_coroutine_threadsafe: a Task, a concurrent
         Future, a self-pipe write and two more event-loop turns, a third of the server's time per
         request. This runs in the loop's own thread already, so a request is answered right here;
-        only a late answer or a request for the simulator becomes a task."""
-        pdu = self.last_pdu
+        only a late answer or a request for the simulator becomes a task. One call per queued
+        request (pymodbus schedules one per decoded frame)."""
+        pdu = self._queue.popleft() if self._queue else None
         device = self._admit(pdu) if pdu else None
         if device is None:
             return
@@ -205,18 +235,21 @@ class _Handler(ServerRequestHandler):
         task.add_done_callback(self._tasks.discard)
 
     def _admit(self, pdu: Any) -> Device | None:
-        """The device to answer `pdu`, or None for no reply (unknown unit, refused client, a
-        silent or dropped link)."""
+        """The device to answer `pdu`, or None when it is answered already or not at all (refused
+        client, unknown unit, a silent or dropped link)."""
         gw = self.server
         device: Device | None = gw.gw_devices.get(pdu.dev_id)
-        if device is None:
-            return None  # unknown unit id: no reply (TCP default in §2.5; RTU: someone else's address)
         client = self._client()
         if gw.gw_allow is not None and client.rsplit(":", 1)[0] not in gw.gw_allow:
-            device.report({"kind": "link", "transport": gw.gw_name, "client": client,
-                           "event": "client refused", "reason": "client"})
+            if device is not None:
+                device.report({"kind": "link", "transport": gw.gw_name, "client": client,
+                               "event": "client refused", "reason": "client"})
             if self.transport and gw.gw_name == "modbus-tcp":
                 self.transport.close()
+            return None
+        if device is None:   # TCP: 0x0B; RTU: no reply (someone else's address on the line)
+            if gw.gw_kind == "tcp":
+                self._no_target(pdu.function_code, pdu.dev_id, pdu.transaction_id)
             return None
         link = device.link
         if link.mode == "silent":
@@ -277,7 +310,12 @@ class _Handler(ServerRequestHandler):
     def send(self, data: bytes, addr: tuple | None = None) -> None:
         if self._corrupt and data:
             data = data[:-1] + bytes([data[-1] ^ 0xFF])  # last CRC byte flipped
+        pending = self.recv_buffer
         super().send(data, addr)
+        if self.server.gw_kind == "tcp":
+            # pymodbus empties the receive buffer on every send: on TCP that drops the requests a
+            # master pipelined behind this one (or the head of its next frame)
+            self.recv_buffer = pending
 
 
 def _direct(device: Device, pdu: Any, client: str, transport: str) -> Any:

@@ -13,9 +13,11 @@ class ModbusTcpTransport(Transport):
     """Modbus TCP on host:port (default 127.0.0.1, so nothing is exposed by accident).
 
     port 0 picks a free port; read `.port` after start(). `allow` limits clients to these IPs
-    (others are disconnected and the attempt is reported as an event). Unknown unit ids get no
-    reply. Link faults per device: silent, late, drop (connection closed); bad_crc does not apply
-    to TCP (no CRC) and is ignored.
+    (others are disconnected and the attempt is reported as an event). A unit id nothing serves
+    gets exception 0x0B (gateway target device failed to respond). Requests may be pipelined:
+    every frame of a segment is answered with its own transaction id, and a frame split across
+    segments is answered once it is complete. Link faults per device: silent, late, drop
+    (connection closed); bad_crc does not apply to TCP (no CRC) and is ignored.
 
     Limits: at most `max_connections` open at once (one more is closed at once), and a connection
     that sends nothing for `idle_timeout` s is closed (0 = never); both are counted. Malformed
