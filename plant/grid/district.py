@@ -23,6 +23,8 @@
     length = 20.0                # m
     diameter = 0.1               # m
     U = 0.19                     # W/(m K)
+    # optional, default off (plant/grid/pipe.py): wall_capacity = 0.0 (J/K, the steel wall's mass x cp,
+    # lumped at the ends), wall_share_b = 0.5 (its share at end `to`), dispersion = 0.0 (m2/s, axial)
 
     [houses.house1]
     file = "house1"              # a shipped house (or alias) or a path relative to this file
@@ -52,7 +54,7 @@ KEYS = {
     "district": {"name", "description", "start", "step", "T_env", "modbus_port_base"},
     "plant": {"node", "T_supply", "T_return"},
     "grid": {"node_volume", "T_init_supply", "T_init_return"},
-    "pipe": {"from", "to", "length", "diameter", "U", "roughness"},
+    "pipe": {"from", "to", "length", "diameter", "U", "roughness", "wall_capacity", "wall_share_b", "dispersion"},
     "house": {"file", "node", "substation", "controller", "overrides", "modbus_port", "can"},
 }
 SUBSTATION = ("rules", "off")
@@ -188,7 +190,9 @@ def load_district(name_or_path: str | Path) -> District:
                 nodes.append(n)
         pipes.append(PipeSpec(name, a, b, number(sec, p, "length", 20.0, 0.1, 1e5),
                               number(sec, p, "diameter", 0.1, 0.005, 2.0), number(sec, p, "U", 0.19, 0.0, 100.0),
-                              number(sec, p, "roughness", 1e-4, 0.0, 0.01)))
+                              number(sec, p, "roughness", 1e-4, 0.0, 0.01),
+                              number(sec, p, "wall_capacity", 0.0, 0.0, 1e9), number(sec, p, "wall_share_b", 0.5, 0.0, 1.0),
+                              number(sec, p, "dispersion", 0.0, 0.0, 10.0)))
     # every node must hang from the plant
     for n in nodes:
         seen, m = set(), n

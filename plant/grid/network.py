@@ -51,6 +51,9 @@ class PipeSpec:
     diameter: float = 0.1
     U: float = 0.19
     roughness: float = 1e-4   # m, for the pressure drop only
+    wall_capacity: float = 0.0   # J/K, the wall's heat capacity lumped at the ends (Pipe C_wall; 0 = none)
+    wall_share_b: float = 0.5    # share of it at end b
+    dispersion: float = 0.0      # m2/s, axial dispersion (0 = plug flow)
 
 
 @dataclass(frozen=True)
@@ -88,8 +91,8 @@ class Grid:
         self.pipe_a = np.array([self.index[p.a] for p in spec.pipes], dtype=np.int64)
         self.pipe_b = np.array([self.index[p.b] for p in spec.pipes], dtype=np.int64)
         self.root = self.index[spec.plant_node]
-        self.sup = [Pipe(p.length, p.diameter, p.U, spec.T_init_supply) for p in spec.pipes]
-        self.ret = [Pipe(p.length, p.diameter, p.U, spec.T_init_return) for p in spec.pipes]
+        self.sup = [_pipe(p, spec.T_init_supply) for p in spec.pipes]
+        self.ret = [_pipe(p, spec.T_init_return) for p in spec.pipes]
         # which nodes lie beyond each pipe (its b side): continuity gives the pipe's flow
         children: dict[int, list[int]] = {i: [] for i in range(len(self.nodes))}
         for k in range(len(spec.pipes)):
@@ -207,6 +210,14 @@ class Grid:
         dp = np.array([2.0 * _dp(p, f) for p, f in zip(self.spec.pipes, self.flow)])
         path = self.beyond.T @ dp if len(dp) else np.zeros(len(self.nodes))  # sum of pipes up to each node
         return float(max(path[self.house_node], default=0.0)) if len(self.house_node) else 0.0
+
+
+def _pipe(p: PipeSpec, T_init: float) -> Pipe:
+    """The Pipe of a PipeSpec; the options only when set (the plain pipe otherwise)."""
+    if p.wall_capacity or p.dispersion:
+        return Pipe(p.length, p.diameter, p.U, T_init, C_wall=p.wall_capacity, wall_share_b=p.wall_share_b,
+                    dispersion=p.dispersion)
+    return Pipe(p.length, p.diameter, p.U, T_init)
 
 
 def _dp(p: PipeSpec, m_flow: float) -> float:
