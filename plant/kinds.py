@@ -15,7 +15,7 @@ KINDS = {k.name: k for k in (
     boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
     mixing_station.Kind(), pipe.Kind(), dhw.Kind(), dhw.CoilKind(), coil.Kind(), coupling_point.Kind(), branch.Kind(),
     measured.ConsumerKind(), measured.DrawKind(), measured.GeneratorKind(), measured.CircuitKind(),
-    measured.ZoneKind(),
+    measured.ZoneKind(), measured.SupplyKind(),
     rule_based.Kind(), room_thermostat.Kind(), storage_fmu.Kind(),
     heat_pump_rules.Kind(), soc_rules.Kind(), substation_rules.Kind(),
     pv.Kind(), solar_collector.Kind(), sensor.Kind(),

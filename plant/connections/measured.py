@@ -2,7 +2,8 @@
 
 Kinds: measured_consumer (primary flow and return on a coupling point), measured_circuit (a
 heating circuit measured on its building side), measured_generator (flow and outlet temperature),
-measured_draw (hot water taken), measured_zone (room temperature).
+measured_draw (hot water taken), measured_zone (room temperature), measured_supply (an emitter fed
+live by a bench's measured flow and supply temperature: PHIL, phil/).
 
 `measured_consumer` stands on a coupling point where a consumer was: it draws the flow of its
 input `<name>.m_flow` from the supply header and returns it at `<name>.T_return` (bind both to a
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import Kind as ComponentKind, pack
+from ..component import REQUIRED, Kind as ComponentKind, pack
 from ..components import dhw
 
 
@@ -113,3 +114,32 @@ class ZoneKind(ComponentKind):
         c.emit("sense", f"{x}[0] = {T_room}")  # what the emitters see this step
         c.emit("setpoints", f"{T_set} = {c.module(zone.__name__)}.setpoint({p}, tau)")
         c.emit("signals", f"{c.signal(inst, 'T_set', 'degC', 'output', 'room set-point (with night reduction)')} = {T_set}")
+
+
+class SupplyKind(ComponentKind):
+    """An emitter fed by a measured supply, with no station of its own: the water arrives at the
+    live measured flow `<name>.m_flow` and temperature `<name>.T_sup` (a PHIL bench's readings,
+    set each step) and leaves at the emitter's return. The requests the building's thermostat
+    makes (`<name>.T_sup_set`, `<name>.m_flow_set`) are inputs the PHIL loop sends to the bench.
+    The heat the water brings, m cp (T_sup - T_return), enters the ledger as heat in."""
+
+    name = "measured_supply"
+    role = "connection"
+    REFS = {"emitter": "emitter"}
+    LINKS = {"emitter": (REQUIRED, "the emitter the measured supply feeds (a radiator or floor heating)")}
+
+    def emit(self, c, inst):
+        emitter = c.instances[inst.options["emitter"]]
+        m = c.signal(inst, "m_flow", "kg/s", "input", "measured supply flow (live boundary)")
+        T_sup = c.signal(inst, "T_sup", "degC", "input", "measured supply temperature (live boundary)")
+        c.signal(inst, "T_sup_set", "degC", "input", "supply temperature the building requests")
+        c.signal(inst, "m_flow_set", "kg/s", "input", "flow the building requests")
+        mv, Q = c.var("m_supply"), c.var("Q_supply")
+        c.emit("hydraulics", f"{mv} = max({m}, 0.0)")
+        T_ret = c.kinds[emitter.kind].emit_emitter(c, emitter, mv, T_sup)
+        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
+        c.emit("signals", f"{Q} = {mv} * CP * ({T_sup} - {T_ret})",
+               f"{sig('T_ret', 'degC', 'return temperature of the emitter (leaving this step)')} = {T_ret}",
+               f"{sig('Q_flow', 'W', 'heat the measured supply brings to the emitter')} = {Q}",
+               f"{c.ledger_entry(inst, 'fuel')} += {Q} * h",
+               f"{c.ledger_entry(inst, 'heat')} += {Q} * h")
