@@ -1,0 +1,108 @@
+"""BenchServer: one bench emulator served over Modbus TCP as its bench map describes, on its own
+real-time (or accelerated) clock.
+
+The bus face is the gateway's: the bench map's DeviceMap, a gateway Device over the bench model
+(through a PlantPort) and the gateway's Modbus TCP transport. So writes are validated as on any
+emulated device (range -> exception 03, a measured value is read-only -> 02), the map's watchdog
+hands the set-points back to the bench's safe values when the twin falls silent, and a failing
+bench answers exception 04 (`fail()`, for tests and `twin bench --fail-at`).
+"""
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any
+
+from gateway.device.device import Device
+from gateway.device.plant_port import PlantPort
+from gateway.device.refusal import Refusal
+from gateway.transports.modbus_tcp import ModbusTcpTransport
+from phil.benchmap import BenchMap, load_bench_map
+from phil.emulator.model import BenchModel, read_params
+from phil.emulator.solar import SolarBench
+from phil.emulator.space_heating import SpaceHeatingBench
+from phil.emulator.tap_water import TapWaterBench
+from plant.errors import ConfigError
+
+MODELS: dict[str, type[BenchModel]] = {
+    "space_heating": SpaceHeatingBench, "tap_water": TapWaterBench, "solar": SolarBench}
+
+
+class BenchDevice(Device):
+    """A Device that can be told to fail: every request is then answered with exception 04."""
+
+    failing = False
+
+    def read_registers(self, table: str, address: int, count: int) -> list[int] | Refusal:
+        if self.failing:
+            return Refusal("failure", f"{self.id}: bench PLC fault")
+        return super().read_registers(table, address, count)
+
+    def write_registers(self, table: str, address: int, words: list[int], client: str = "",
+                        transport: str = "") -> Refusal | None:
+        if self.failing:
+            return Refusal("failure", f"{self.id}: bench PLC fault")
+        return super().write_registers(table, address, words, client, transport)
+
+
+def make_model(name: str, seed: int = 0, params: dict[str, float] | None = None) -> BenchModel:
+    """The bench model of phil/benches/<name>.toml (its [bench] kind), parameters overridden."""
+    doc = read_params(name)
+    kind = doc.get("bench", {}).get("kind", name)
+    if kind not in MODELS:
+        raise ConfigError(f"{doc['path']} [bench] kind = {kind!r}: must be one of {', '.join(MODELS)}")
+    if params:
+        doc = {**doc, "params": {**doc.get("params", {}), **params}}
+    return MODELS[kind](doc, seed)
+
+
+class BenchServer:
+    """A bench model on its own clock, served on Modbus TCP at host:port (0 = a free port)."""
+
+    def __init__(self, name: str, host: str = "127.0.0.1", port: int = 0, speed: float = 1.0,
+                 seed: int = 0, params: dict[str, float] | None = None,
+                 bench_map: BenchMap | None = None) -> None:
+        self.name = name
+        self.model = make_model(name, seed, params)
+        doc = read_params(name)
+        self.map = bench_map or load_bench_map(doc.get("bench", {}).get("map", name))
+        self.port_lock = PlantPort(self.model)
+        self.device = BenchDevice(self.map.dmap, self.port_lock)
+        self.transport = ModbusTcpTransport([self.device], host=host, port=port, idle_timeout=0)
+        self.speed = speed
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name=f"bench-{name}", daemon=True)
+
+    @property
+    def port(self) -> int | None:
+        return self.transport.port
+
+    def start(self) -> "BenchServer":
+        self.transport.start()
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(5)
+        self.transport.stop()
+
+    def fail(self, on: bool = True) -> None:
+        self.device.failing = on
+
+    def _run(self) -> None:
+        """Pace the model: simulated time = wall time since start x speed, in model steps."""
+        wall0, h = time.monotonic(), self.model.h
+        while not self._stop.is_set():
+            target = (time.monotonic() - wall0) * self.speed
+            with self.port_lock.lock:
+                while self.model.t + h <= target:
+                    self.model.step(h)
+                self.device.tick(self.model.t)
+            self._stop.wait(min(0.01, max(h / self.speed, 0.0005)))
+
+    def summary(self) -> dict[str, Any]:
+        with self.port_lock.lock:
+            return {"bench": self.name, "t": self.model.t, "ledger": self.model.balance(),
+                    "inputs": dict(self.model.inputs)}
