@@ -29,8 +29,8 @@ CP = 4186.0  # J/(kg K), water
  I_PUMP_MAX, I_T_RUN, I_KP_V, I_KI_V, I_LEAK,
  I_M_CHG, I_IDLE_K,
  I_TAU_PROBE, I_TAU_ROOM, I_M_HCS, I_TAU_HCS,
- I_T_COLD, I_T_DHW, I_HC_TSET, I_T_DAY, I_T_NIGHT,
- N_PARAM) = range(60)
+ I_T_COLD, I_T_DHW, I_HC_TSET, I_T_DAY, I_T_NIGHT, I_BOI_TMAX,
+ N_PARAM) = range(61)
 
 N_CH = 38
 # channel indices (order of house1-channels.csv without t_s)
@@ -43,7 +43,7 @@ C_WWS0 = 17      # WWS_T1..3 -> 17..19
 
 # ledger slots [J]
 (L_FUEL, L_EL, L_GENLOSS, L_PIPELOSS, L_STORELOSS, L_BUILDING, L_DHW, L_E0, L_E1,
- L_IDLE_MASS, L_IDLE_TIME, N_LEDGER) = range(12)
+ L_IDLE_MASS, L_IDLE_TIME, L_TMIN, L_TMAX, N_LEDGER) = range(14)
 
 # aux record per sample
 (A_M_CHP, A_CHP_STATE, A_M_TANK, A_U_VALVE, A_Q_RAD, A_SOC, N_AUX) = range(7)
@@ -214,6 +214,8 @@ def run(P, Tb, Td, Tc, Tr, nodes, b_sens_pos, b_sens_tau, d_sens_pos, d_sens_tau
     B_M, D_M = P[I_B_M], P[I_D_M]
     isamp = 0
     nsamp = sample_steps.size
+    ledger[L_TMIN] = 1e9
+    ledger[L_TMAX] = -1e9
     soc = 0.0
     nmin = in_Tout.size
 
@@ -327,8 +329,8 @@ def run(P, Tb, Td, Tc, Tr, nodes, b_sens_pos, b_sens_tau, d_sens_pos, d_sens_tau
             eta_b = interp1(T_pbr, boi_x, boi_eff) * P[I_BOI_ETAMAX]
             Q_boi = f * Q_ss * P[I_BOI_HF]
             P_gas_b = f * Q_ss / eta_b
-            # branch pump: 20 K rise, reduced so that the supply stays below 85 degC
-            dT_set = min(P[I_BOI_DT], max(5.0, 85.0 - T_pbr))
+            # branch pump: 20 K rise, reduced so that the supply stays near or below T_BOI_MAX
+            dT_set = min(P[I_BOI_DT], max(5.0, P[I_BOI_TMAX] - T_pbr))
             m_b = Q_boi / (CP * dT_set) + P[I_BOI_KP] * (T_boi - T_pbr - dT_set)
             m_b = min(P[I_BOI_MMAX], max(P[I_BOI_MMIN], m_b))
         elif t - boi_toff < P[I_BOI_RUNON]:
@@ -472,6 +474,14 @@ def run(P, Tb, Td, Tc, Tr, nodes, b_sens_pos, b_sens_tau, d_sens_pos, d_sens_tau
             if chp_state == 0:
                 ledger[L_IDLE_MASS] += m_c * dt
                 ledger[L_IDLE_TIME] += dt
+
+            if step % 20 == 0:
+                for j in range(nb):
+                    ledger[L_TMIN] = min(ledger[L_TMIN], Tb[j])
+                    ledger[L_TMAX] = max(ledger[L_TMAX], Tb[j])
+                for j in range(nd):
+                    ledger[L_TMIN] = min(ledger[L_TMIN], Td[j])
+                    ledger[L_TMAX] = max(ledger[L_TMAX], Td[j])
 
         # ---- sensors ----------------------------------------------------------------------------
         for i in range(10):

@@ -31,6 +31,7 @@ N_DHW_CELLS = 50
 N_COIL_SEG = 8
 N_RAD = 4
 DT = 0.5                 # s, time step of the core
+T_CHP_MAX = 85.0         # the CHP's high-limit (its regulated supply is about 80 degC)
 SPINUP_DAYS = 2.0        # simulated before the logged window (not logged)
 PLUME_BUFFER_L = 15.0    # nominal mixing volume around a buffer inflow port
 PLUME_DHW_COLD_L = 5.0   # cold-water inlet of the DHW tank
@@ -240,20 +241,21 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     P[core.I_C_BOI] = nz["boiler_water_kg"] * CP + nz["boiler_steel_kg"] * 460.0
     P[core.I_UA_BOI] = 2.0
     P[core.I_CHP_MMIN] = 0.008
-    P[core.I_CHP_KP] = 0.010
+    P[core.I_CHP_KP] = 0.015
     P[core.I_CHP_MMAX] = 0.12
-    P[core.I_CHP_TREG] = 77.0
+    P[core.I_CHP_TREG] = 78.0
     P[core.I_CHP_RUNON] = 90.0
     P[core.I_CHP_PELMAX] = 1900.0
     P[core.I_CHP_ETAEL] = 0.24
     P[core.I_BOI_MMIN] = 0.03
     P[core.I_BOI_MMAX] = 0.30
-    P[core.I_BOI_KP] = 0.01
+    P[core.I_BOI_KP] = 0.03
     P[core.I_BOI_DT] = 20.0
     P[core.I_BOI_RUNON] = 120.0
     P[core.I_BOI_HF] = effects.boiler_heat_factor
     P[core.I_BOI_PNOM] = 14000.0
     P[core.I_BOI_ETAMAX] = 1.05
+    P[core.I_BOI_TMAX] = 82.0
     # ---- pipes with sensors, headers ----
     names = ["CHP_TVL", "CHP_TRL", "CB_TVL", "CB_TRL"]
     p_C = np.array([nz["pipe_sensor_water_kg"][k] * CP * 1.3 for k in names])
@@ -371,6 +373,7 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
         eff_size["idle_chp_flow_week_mean_kg_s"] = led[core.L_IDLE_MASS] / (days * 86400.0)
         eff_size["chp_standing_share"] = idle_time / (days * 86400.0)
     final = dict(Tb=Tb, Td=Td, Tc=Tc, Tr=Tr, nodes=nodes, T_room_plant=T_room,
-                 T_cold=T_COLD, T_chp_max=80.0 + 10.0)
+                 T_cold=T_COLD, T_chp_max=T_CHP_MAX,
+                 tank_T_min=led[core.L_TMIN], tank_T_max=led[core.L_TMAX])
     return Result(t_s=t_s, rec=rec, aux=aux, ledger=ledger, closure=closure,
                   effect_size=eff_size, final=final)

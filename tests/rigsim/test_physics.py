@@ -38,6 +38,10 @@ def test_ledger_closes_with_effects():
 def test_temperatures_and_flows_within_physical_limits(day):
     nz, r = day
     f = r.final
+    # every tank cell over the whole logged window, and at its end
+    assert f["tank_T_min"] >= f["T_cold"] - 1e-6
+    assert f["tank_T_max"] <= f["T_chp_max"]
+    assert f["tank_T_max"] > 60.0
     for T in (f["Tb"], f["Td"]):
         assert T.min() >= f["T_cold"] - 1e-6
         assert T.max() <= f["T_chp_max"]
