@@ -43,6 +43,12 @@ def test_case_files_and_contract(case_dir):
     assert header[1:] == [r["channel"] for r in channel_list() if r["channel"] != "t_s"]
     assert len(rows) - 1 == 720 == meta["rows"]
     t = [float(r[0]) for r in rows[1:]]
+    res = {r["channel"]: float(r["resolution"]) for r in channel_list()}
+    for j, name in enumerate(header[1:], start=1):
+        vals = [float(r[j]) for r in rows[1:]]
+        assert all(abs(v / res[name] - round(v / res[name])) < 1e-6 for v in vals), name
+        if name.startswith("BT_T"):
+            assert len(set(vals)) > 10, name
     assert all(abs(ti - 60 * k) <= 0.5 + 1e-9 for k, ti in enumerate(t))
     cols = tomllib.loads((d / "columns.toml").read_text(encoding="utf-8"))
     assert cols["recording"] == {"start": "2021-01-10", "file": "recording.csv", "time": "t_s"}
