@@ -339,7 +339,7 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     rec = np.zeros((n_samp, core.N_CH))
     aux = np.zeros((n_samp, core.N_AUX))
     led = np.zeros(core.N_LEDGER)
-    core.run(P, Tb, Td, Tc, Tr, nodes, b_sens_pos, b_sens_tau, d_sens_pos, d_sens_tau,
+    n_rec = core.run(P, Tb, Td, Tc, Tr, nodes, b_sens_pos, b_sens_tau, d_sens_pos, d_sens_tau,
              b_w_top, b_w_bot, b_k_top, b_k_bot, b_UA, d_w_cold, d_k_hot, d_UA,
              coil_W, p_C, p_UA,
              chp_eff_x, chp_eff_y, su[:, 0].copy(), su[:, 1].copy(), su[:, 4].copy(),
@@ -349,6 +349,8 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
              n_steps, log_step, sample_steps, t_s,
              eff_tag, float(effects.lag_s), int(round(effects.delay_s / dt)),
              float(effects.offset_K), rec, aux, led)
+    if n_rec != n_samp:
+        raise RuntimeError(f"recorded {n_rec} of {n_samp} samples")
     kwh = 3.6e6
     ledger = {
         "fuel_in_kWh": led[core.L_FUEL] / kwh,
