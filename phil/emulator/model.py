@@ -91,7 +91,9 @@ class BenchModel:
             spec = self.sensors.get(reading, {})
             value = self.x[state] + float(spec.get("noise", 0.0)) * self.rng.standard_normal()
             resolution = float(spec.get("resolution", 0.0))
-            self.readings[reading] = round(value / resolution) * resolution if resolution > 0 else value
+            value = round(value / resolution) * resolution if resolution > 0 else value
+            # a meter's low-flow cut-off: below it the reading is 0 (noise on still water is not flow)
+            self.readings[reading] = 0.0 if abs(self.x[state]) < float(spec.get("cutoff", -1.0)) else value
 
     def advance(self, h: float) -> None:
         raise NotImplementedError

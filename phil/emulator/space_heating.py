@@ -14,8 +14,9 @@ Q_hx = z eps m_cooling_max cp (T_ret - T_cooling), and returns to the valve.
     meets the set return; it cannot cool below T_cooling nor take more than its capacity.
 Ledger [J]: heat from the inlet  m y cp (T_inlet - T_ret) = heat to the cooling water + change of
 the two nodes' stored heat. `E_consumed` = integral of m cp (T_sup - T_ret): the heat the circuit
-gave between the supply and the return sensor, i.e. what the bench's heat meter counts as the
-building's consumption (PHIL compares it with the heat the simulated building took).
+gave between the supply and the return sensor. The bench's heat meter (register E_HC_kWh)
+counts it with its own flow meter's reading (low-flow cut-off included), as a real meter does;
+PHIL compares that with the heat the simulated building took.
 
 | parameter | unit | meaning |
 |---|---|---|
@@ -42,7 +43,7 @@ RHO = 1000.0
 class SpaceHeatingBench(BenchModel):
     INPUTS = {"T_sup_set": 20.0, "m_flow_set": 0.0, "T_ret_set": 20.0}
     READINGS = {"T_sup": "T_sup", "m_flow": "m_flow", "T_ret": "T_ret", "T_inlet": "T_inlet",
-                "E_consumed": "E_consumed"}
+                "E_consumed": "E_meter"}
     DEFAULTS = {"T_inlet": 70.0, "T_cooling": 12.0, "m_flow_max": 0.5, "tau_pump": 5.0,
                 "t_valve": 90.0, "K_p_supply": 0.05, "T_i_supply": 60.0, "V_supply": 0.004,
                 "V_exchanger": 0.002, "m_cooling_max": 0.5, "eps": 0.8, "K_p_return": 0.2,
@@ -52,7 +53,7 @@ class SpaceHeatingBench(BenchModel):
         super().__init__(doc, seed)
         T0 = self.p["T_init"]
         self.x = {"T_sup": T0, "T_ret": T0, "m_flow": 0.0, "y": 0.0, "z": 0.0, "i_sup": 0.0,
-                  "i_ret": 0.0, "T_sensor": T0, "T_inlet": self.p["T_inlet"], "E_consumed": 0.0}
+                  "i_ret": 0.0, "T_sensor": T0, "T_inlet": self.p["T_inlet"], "E_meter": 0.0}
         self.ledger = {"heat_inlet": 0.0, "heat_cooling": 0.0, "E_consumed": 0.0}
         self._E0 = self.stored_energy()
         self.sample()
@@ -86,7 +87,8 @@ class SpaceHeatingBench(BenchModel):
         self.ledger["heat_inlet"] += Q_in * h
         self.ledger["heat_cooling"] += Q_hx * h
         self.ledger["E_consumed"] += Q_use * h
-        x["E_consumed"] = self.ledger["E_consumed"]
+        # the heat meter: its own flow meter's reading (with its low-flow cut-off) x the true spread
+        x["E_meter"] += self.readings.get("m_flow", m) * CP * (T_sup - T_ret) * h
 
     def balance(self) -> dict[str, float]:
         L = dict(self.ledger)

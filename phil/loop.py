@@ -1,0 +1,225 @@
+"""PhilLoop: the simulated side of a house exchanging with its benches every step, in real time.
+
+One step (docs/phil.md): the PHIL house's requests become set-points (phil/wiring.py), limited
+(phil/safety.py) and written to each bench as Modbus TCP master (phil/master.py); the bench's
+measurements are read back, judged, and set as the house's live measured boundary; the house
+steps by dt; one row is recorded (profiles/recording.py: signals.csv flushed every step,
+events.csv for every rejection and the stop). The run ends at its duration, on an operator stop
+(SIGINT/SIGTERM or the stop file appearing) or when a measurement stays bad past its stop limit;
+in every case the safe set-points are written to every bench (writable points only) and the
+recording is closed intact. The per-interface report is phil/report.py's.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from gateway.clock import PacedClock
+from phil.benchmap import BenchMap, load_bench_map
+from phil.master import BenchLink, ExchangeError
+from phil.report import Tally
+from phil.safety import MeasurementGuard, SetpointLimiter
+from phil.wiring import WIRINGS
+from plant.errors import ConfigError
+from plant.house import load_house
+from profiles.recording import Recorder
+
+HOUSE_FILES = {"house1": "house1_phil", "SF1": "house1_phil"}
+
+
+@dataclass
+class BenchChannel:
+    """Everything the loop keeps per bench."""
+
+    map: BenchMap
+    link: BenchLink
+    limiter: SetpointLimiter
+    guard: MeasurementGuard
+    wiring: Any
+    sent: dict[str, float] = field(default_factory=dict)
+
+
+@dataclass
+class PhilOptions:
+    speed: float = 1.0
+    dt: float = 1.0
+    hours: float = 24.0
+    typeday: int = 0
+    record: str | Path | None = None
+    stale_s: float | None = None      # wall seconds; default: each bench map's [phil]
+    stop_s: float | None = None
+    timeout_s: float = 0.5
+    retries: int = 1
+    stop_file: str | Path | None = None
+    warmup_s: float = 600.0           # simulated s before the run proper: benches and house settle
+
+
+def house_file(house: str) -> str:
+    """The PHIL variant of a house (house1 -> plant/houses/house1_phil.toml), or a path as is."""
+    if house.endswith(".toml"):
+        return house
+    if house not in HOUSE_FILES:
+        raise ConfigError(f"twin phil {house}: no PHIL variant; known: {', '.join(sorted(HOUSE_FILES))}")
+    return HOUSE_FILES[house]
+
+
+class PhilLoop:
+    def __init__(self, house: str, benches: dict[str, tuple[str, int]], options: PhilOptions) -> None:
+        self.o = options
+        overrides = {"profiles.typeday": options.typeday} if options.typeday else None
+        self.house = load_house(house_file(house), controller="rule_based", overrides=overrides)
+        self.channels: dict[str, BenchChannel] = {}
+        for name, (host, port) in benches.items():
+            bmap = load_bench_map(name)
+            if bmap.id not in WIRINGS:
+                raise ConfigError(f"--bench {name}: not wired into the PHIL loop yet; wired: {', '.join(WIRINGS)}")
+            self.channels[name] = BenchChannel(
+                bmap, BenchLink(bmap, host, port, options.timeout_s, options.retries),
+                SetpointLimiter(bmap), MeasurementGuard(bmap, options.stale_s, options.stop_s,
+                                                        time.monotonic()), WIRINGS[bmap.id])
+        self.tally = Tally(self.channels)
+        self.columns = self._columns()
+        self.recorder = Recorder(options.record, self.columns, {
+            "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
+            "typeday": options.typeday, "benches": {n: f"{h}:{p}" for n, (h, p) in benches.items()},
+        }, interval=0.0) if options.record else None
+        self.stop_reason = ""
+        self.warmed = 0.0
+        self._stop = threading.Event()
+        self._done = threading.Event()
+        self.clock: PacedClock | None = None
+
+    def _columns(self) -> list[str]:
+        cols = []
+        for name, ch in self.channels.items():
+            cols += [f"{name}.{i.name}" for i in ch.map.setpoints()]
+            cols += [f"{name}.{i.name}" for i in ch.map.measurements()]
+            cols += [f"{name}.{i.name}.used" for i in ch.map.measurements()]
+            cols += [f"{name}.{i.name}.flag" for i in ch.map.measurements()]
+            cols += [f"{name}.exchange_ms"]
+            cols += [s for s in ch.wiring.signals if s not in cols]
+        return cols + ["lateness_ms"]
+
+    # --- one step ------------------------------------------------------------------------------
+    def step(self, dt: float) -> None:
+        """Exchange with every bench, then advance the house by dt (runs on the clock's thread)."""
+        if self._done.is_set():
+            return
+        try:
+            warming = self.warmed < self.o.warmup_s
+            row = self._exchange_all(dt, counted=not warming)
+            if warming:
+                # the benches settle on the set-points while the house settles on an ideal
+                # bench (measured = requested); nothing of it is counted
+                self.house.set("mixer.T_sup", self.house.get("mixer.T_sup_set"))
+                self.house.set("mixer.m_flow", self.house.get("mixer.m_flow_set"))
+                self.warmed += dt
+            self.house.step(dt)
+            if not warming:
+                self.tally.after_step(self.house, dt)
+            self._record(row, self.house.t)
+            reason = self._why_stop()
+            if reason:
+                self._finish(reason)
+        except Exception as exc:  # the clock thread's boundary: stop safely, keep the recording
+            self._finish(f"internal error: {exc!r}")
+
+    def _exchange_all(self, dt: float, counted: bool = True) -> dict[str, float]:
+        row: dict[str, float] = {}
+        for name, ch in self.channels.items():
+            wanted = ch.wiring.setpoints(self.house)
+            ch.sent = ch.limiter.limit(wanted, dt)
+            measured, failure = None, ""
+            try:
+                measured = ch.link.exchange(ch.sent)
+            except ExchangeError as exc:
+                failure = f"{exc.kind}: {exc.detail}"
+            wall = time.monotonic()
+            judged = ch.guard.judge(measured, wall, failure)
+            for iname, j in judged.items():
+                if not j.ok:
+                    self._event({"kind": "rejected", "device": name, "point": iname,
+                                 "value": (measured or {}).get(iname, math.nan), "reason": j.reason})
+            used = {k: j.value for k, j in judged.items()}
+            if all(not math.isnan(v) for v in used.values()):
+                ch.wiring.feed(self.house, used)
+            if counted:
+                self.tally.exchange(name, ch.sent, measured, judged, ch.link.last_exchange_s, dt)
+            row.update({f"{name}.{k}": v for k, v in ch.sent.items()})
+            for k, j in judged.items():
+                row[f"{name}.{k}"] = (measured or {}).get(k, math.nan)
+                row[f"{name}.{k}.used"] = j.value
+                row[f"{name}.{k}.flag"] = 0.0 if j.ok else 1.0
+            row[f"{name}.exchange_ms"] = ch.link.last_exchange_s * 1e3
+        return row
+
+    def _record(self, row: dict[str, float], t: float) -> None:
+        if not self.recorder:
+            return
+        for name in self.columns:
+            if name not in row and name != "lateness_ms":
+                row[name] = self.house.get(name)
+        late = self.clock.lateness() if self.clock else []
+        row["lateness_ms"] = float(late[-1]) * 1e3 if len(late) else 0.0
+        self.recorder.signals(t, [row[c] for c in self.columns])
+        self.recorder.flush()
+
+    def _event(self, ev: dict[str, Any]) -> None:
+        if self.recorder:
+            self.recorder.event({"t": self.house.t, **ev})
+
+    def _why_stop(self) -> str:
+        if self._stop.is_set():
+            return "operator stop"
+        if self.o.stop_file and Path(self.o.stop_file).exists():
+            return f"operator stop (stop file {self.o.stop_file})"
+        wall = time.monotonic()
+        for ch in self.channels.values():
+            reason = ch.guard.must_stop(wall)
+            if reason:
+                return reason
+        if self.house.t >= self.o.warmup_s + self.o.hours * 3600.0 - 1e-9:
+            return "end of run"
+        return ""
+
+    # --- run and stop --------------------------------------------------------------------------
+    def request_stop(self) -> None:
+        """Operator stop (signal handler): the next step sends the safe set-points and ends."""
+        self._stop.set()
+
+    def _finish(self, reason: str) -> None:
+        if self._done.is_set():
+            return
+        self.stop_reason = reason
+        for name, ch in self.channels.items():
+            try:
+                ch.link.write(ch.limiter.safe())
+                self._event({"kind": "safe", "device": name, "reason": reason, "accepted": True})
+            except ExchangeError as exc:
+                self._event({"kind": "safe", "device": name, "reason": reason, "accepted": False,
+                             "detail": str(exc)})
+            self.tally.safe_sent[name] = ch.limiter.safe()
+        self._event({"kind": "stop", "reason": reason})
+        self._done.set()
+
+    def run(self) -> dict[str, Any]:
+        """Run paced until the end or a stop; returns the report (also stored as report.json)."""
+        self.clock = PacedClock(self.o.speed, self.o.dt)
+        self.clock.bind(self.step)
+        self.clock.start()
+        while not self._done.wait(0.1):
+            if self._stop.is_set() and not self.clock._thread.is_alive():
+                self._finish("operator stop")
+        self.clock.stop()
+        for ch in self.channels.values():
+            ch.link.close()
+        report = self.tally.report(self.house, self.stop_reason, self.clock.lateness())
+        if self.recorder:
+            self.recorder.close({"report": report})
+            import json
+            (Path(self.o.record) / "report.json").write_text(json.dumps(report, indent=2, default=str))
+        return report

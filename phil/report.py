@@ -1,0 +1,140 @@
+"""Tally and report of a PHIL run: per interface, how well the bench followed, the heat both
+sides counted, and what was rejected.
+
+Heat (space heating), the two quantities the reference compares (consumed heat of model and
+bench within 0.1 %):
+  * bench: the increase of the bench's own heat meter E_HC_kWh between the first and the last
+    good reading: the heat its circuit gave between its supply and return sensors, i.e. what its
+    exchanger had to remove, integrated by the bench on its own clock from its true states;
+  * model: the heat the simulated radiator circuit took from the water the bench delivered,
+    sum of m_meas cp (T_sup_meas - T_return_model) dt over the same steps (mixer.Q_flow, the
+    ledger's heat in of plant/houses/house1_phil.toml).
+They agree when the bench returns the water at the set return (the radiator model's return) and
+delivers the flow and supply it reports: their difference is the flow-weighted return follow
+error, plus sensor noise and the exchange's timing, which average out over a run. The heat the
+radiators gave the room differs from both by the change of the radiator water's stored heat
+(reported too, from the house ledger).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from phil.wiring import FLOWING
+
+
+class Tally:
+    def __init__(self, channels: dict[str, Any]) -> None:
+        self.channels = channels
+        self.n_steps = 0
+        self.sq = {b: {s: 0.0 for s, _ in ch.wiring.pairs} for b, ch in channels.items()}
+        self.n_follow = {b: {s: 0 for s, _ in ch.wiring.pairs} for b, ch in channels.items()}
+        self.rejected = {b: {} for b in channels}
+        self.failures = {b: 0 for b in channels}
+        self.exchange_s = {b: [] for b in channels}
+        self.meter = {b: [math.nan, math.nan] for b in channels}   # first and last good reading
+        self.model_J = {b: 0.0 for b in channels}
+        self.model_J_pending = {b: 0.0 for b in channels}
+        self.safe_sent: dict[str, dict[str, float]] = {}
+        self.room: list[tuple[float, float, float]] = []           # t, T_room, T_set
+
+    def exchange(self, bench: str, sent: dict, measured: dict | None, judged: dict,
+                 exchange_s: float, dt: float) -> None:
+        ch = self.channels[bench]
+        self.exchange_s[bench].append(exchange_s)
+        if measured is None:
+            self.failures[bench] += 1
+        for name, j in judged.items():
+            if not j.ok:
+                kind = j.reason.split(" ")[0].rstrip(":")
+                self.rejected[bench].setdefault(name, {}).setdefault(kind, 0)
+                self.rejected[bench][name][kind] += 1
+        flowing = not ch.wiring.flow or judged[ch.wiring.flow].value > FLOWING
+        for s, m in ch.wiring.pairs:
+            temperature = ch.map.dmap.point(s).unit == "°C"
+            if judged[m].ok and (flowing or not temperature):
+                self.sq[bench][s] += (sent[s] - judged[m].value) ** 2
+                self.n_follow[bench][s] += 1
+        heat = judged.get(ch.wiring.heat)
+        if heat is not None and heat.ok:
+            first, _ = self.meter[bench]
+            self.meter[bench] = [heat.value if math.isnan(first) else first, heat.value]
+            # the model's heat counts from the first good meter reading to the last one
+            self.model_J[bench] += self.model_J_pending[bench]
+            self.model_J_pending[bench] = 0.0
+
+    def after_step(self, house: Any, dt: float) -> None:
+        self.n_steps += 1
+        for bench in self.channels:
+            if not math.isnan(self.meter[bench][0]):
+                self.model_J_pending[bench] += house.get("mixer.Q_flow") * dt
+        self.room.append((house.t, house.get("zone.T_room"), house.get("zone.T_set")))
+
+    def _room(self) -> dict[str, Any]:
+        if not self.room:
+            return {}
+        t, T, T_set = (np.array(c) for c in zip(*self.room))
+        deficit = np.clip(T_set - T, 0.0, None)
+        dt = np.diff(t, prepend=t[0])
+        cold = deficit > 0.5
+        return {"T_room_min_degC": float(T.min()), "T_room_mean_degC": float(T.mean()),
+                "degree_hours_below_set_Kh": float((deficit * dt).sum() / 3600.0),
+                "hours_more_than_0_5K_below_set": float(dt[cold].sum() / 3600.0),
+                "first_time_0_5K_below_set_s": float(t[cold][0]) if cold.any() else None}
+
+    def report(self, house: Any, stop_reason: str, lateness: np.ndarray) -> dict[str, Any]:
+        L = house.ledger()
+        out: dict[str, Any] = {"stop_reason": stop_reason, "t_end_s": house.t, "steps": self.n_steps,
+                               "room": self._room(), "benches": {}}
+        for bench, ch in self.channels.items():
+            ex = np.array(self.exchange_s[bench]) * 1e3
+            first, last = self.meter[bench]
+            bench_kWh = last - first if not math.isnan(first) else math.nan
+            model_kWh = self.model_J[bench] / 3.6e6
+            out["benches"][bench] = {
+                "follow_rms": {s: (math.sqrt(self.sq[bench][s] / self.n_follow[bench][s])
+                                   if self.n_follow[bench][s] else None) for s, _ in ch.wiring.pairs},
+                "units": {s: ch.map.dmap.point(s).unit for s, _ in ch.wiring.pairs},
+                "heat_bench_kWh": bench_kWh, "heat_model_kWh": model_kWh,
+                "heat_error_pct": (100.0 * (bench_kWh - model_kWh) / model_kWh
+                                   if model_kWh > 0 and not math.isnan(bench_kWh) else None),
+                "heat_to_room_kWh": L["heat_building"] / 3.6e6,
+                "radiator_water_stored_change_kWh": L["delta_stored"] / 3.6e6,
+                "rejected": self.rejected[bench], "failed_exchanges": self.failures[bench],
+                "setpoints_limited": dict(ch.limiter.clamped),
+                "safe_sent": self.safe_sent.get(bench),
+                "exchange_ms": {"median": float(np.median(ex)) if len(ex) else None,
+                                "p99": float(np.percentile(ex, 99)) if len(ex) else None},
+            }
+        late = lateness * 1e3
+        out["lateness_ms"] = {"median": float(np.median(late)) if len(late) else None,
+                              "p99": float(np.percentile(late, 99)) if len(late) else None}
+        return out
+
+
+def format_report(report: dict[str, Any]) -> str:
+    """The report as text, one block per bench."""
+    lines = [f"PHIL run: {report['t_end_s'] / 3600:.2f} h simulated, {report['steps']} steps; "
+             f"stopped: {report['stop_reason']}"]
+    room = report.get("room") or {}
+    if room:
+        lines.append(f"  room: min {room['T_room_min_degC']:.2f} degC, {room['degree_hours_below_set_Kh']:.2f} "
+                     f"K h below set, {room['hours_more_than_0_5K_below_set']:.2f} h more than 0.5 K below")
+    for bench, b in report["benches"].items():
+        lines.append(f"  bench {bench}:")
+        for s, rms in b["follow_rms"].items():
+            lines.append(f"    {s:28s} RMS follow error {rms if rms is None else f'{rms:.3f}'} {b['units'][s]}")
+        err = b["heat_error_pct"]
+        lines.append(f"    heat: bench {b['heat_bench_kWh']:.4f} kWh, model {b['heat_model_kWh']:.4f} kWh"
+                     + (f" ({err:+.4f} %)" if err is not None else "")
+                     + f"; to the room {b['heat_to_room_kWh']:.4f} kWh")
+        lines.append(f"    rejected: {b['rejected'] or 'none'}; failed exchanges {b['failed_exchanges']}; "
+                     f"exchange median {b['exchange_ms']['median']} ms, p99 {b['exchange_ms']['p99']} ms")
+        if b["safe_sent"]:
+            lines.append(f"    safe set-points sent: {b['safe_sent']}")
+    lat = report["lateness_ms"]
+    lines.append(f"  step lateness: median {lat['median']} ms, p99 {lat['p99']} ms")
+    return "\n".join(lines)
+
