@@ -65,7 +65,7 @@ def main(argv: list[str]) -> int:
     print(f"{'test':12s} {'plain K':>8s} {'diagnosed K':>11s} {'Modelica K':>10s}  effects (fitted vs published)")
     for test, r in results:
         ref = r["reference"]
-        eff = "; ".join(f"{e['effect']} {e['value']:.4g} {e['unit']}"
+        eff = "; ".join(f"{e['effect']} {e['value']:.4g}" + (f" {e['unit']}" if e["unit"] != "1" else "")
                         + (f" vs {e['published']:.4g} (x{e['ratio']:.2f})" if e["ratio"] is not None else "")
                         for e in r["effects"]) or "none"
         modelica = f"{ref['rmse_modelica']:.3f}" if ref else "-"
