@@ -1,7 +1,9 @@
-"""The diagnosis against an independent truth: labsim's public suite (plant/labsim/suite.py).
+"""The diagnosis against independent truths: the public suites of labsim (plant/labsim/suite.py)
+and of rigsim (rigsim/suite.py, written clean-room from docs/lab/ and the physics reference).
 
-Every case is a 7-day lab-style recording made by plant/labsim, a simulator of house 1 that shares
-no code with the twin; `twin diagnose` (plant.diagnose.diagnose, --jobs 2) runs on each, and the
+Every case is a 7-day lab-style recording made by a simulator of house 1 that shares no code with
+the twin, on a rig drawn per realisation (--realisation R: model-form variations; 0 = labsim's
+nominal rig); `twin diagnose` (plant.diagnose.diagnose, --jobs 2) runs on each, and the
 outcome (the reported effect, else the verdict) is compared with the case's expected outcomes
 (meta.json `expected`; for a pair of effects either one counts; a sensor effect must name the
 sensor the truth put it on). Prints one line per case, a
@@ -9,8 +11,11 @@ confusion table (expected vs reported), each named effect's size against the tru
 held-out RMSE of the affected temperatures before and after where missing physics is found, and
 `RESULT correct=N total=M`, `RESULT sizes_within_20pct=N of=M`, `RESULT rmse_cut_ge_50pct=N of=M`.
 
-    python benchmarks/diagnose_independent.py [CASE ...] [--days 7] [--jobs 2] [--keep DIR]
+    python benchmarks/diagnose_independent.py [CASE ...] [--simulator labsim|rigsim] [--realisation R ...]
+                                              [--days 7] [--jobs 2] [--keep DIR]
                                               [--start 2021-01-10] [--seed N] [--no-ports]
+
+Prints a summary per simulator and realisation, and the RESULT lines over all of them.
 
 --start and --seed make other realisations of the same cases (another week of weather and
 consumption, other sensor noise), to check that the verdicts do not hang on one recording.
@@ -26,7 +31,16 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from plant.diagnose import diagnose, recording_io  # noqa: E402
-from plant.labsim.suite import CASES, make_case  # noqa: E402
+
+
+def _suite(simulator: str):
+    """(CASES, make_case(case, out, days, start, seed, ports, realisation)) of a simulator."""
+    if simulator == "labsim":
+        from plant.labsim import suite
+        return suite.CASES, suite.make_case
+    from rigsim import suite
+    return suite.CASES, lambda case, out, days, start, seed, ports, realisation: suite.make_case(
+        case, out, days=days, start=start, realisation=realisation)
 
 
 def _plume_litres(rep):
@@ -79,15 +93,20 @@ def main():
     p.add_argument("--start", default="2021-01-10", help="first day of every recording")
     p.add_argument("--seed", type=int, help="noise seed of every case (default: each case its own)")
     p.add_argument("--no-ports", action="store_true", help="columns files without the storage's port heights")
+    p.add_argument("--simulator", choices=("labsim", "rigsim"), default="labsim")
+    p.add_argument("--realisation", type=int, nargs="+", default=[0],
+                   help="rig realisations (model-form variations; labsim's 0 is its nominal rig)")
     a = p.parse_args()
+    CASES, make_case = _suite(a.simulator)
     cases = a.cases or list(CASES)
     rows = []
     t_all = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
         root = a.keep or Path(tmp)
-        for case in cases:
-            d = root / case
-            meta = make_case(case, d, days=a.days, start=a.start, seed=a.seed, ports=not a.no_ports)
+        for real, case in ((r, c) for r in a.realisation for c in cases):
+            d = root / a.simulator / f"r{real}" / case
+            meta = make_case(case, d, days=a.days, start=a.start, seed=a.seed, ports=not a.no_ports,
+                             realisation=real)
             rec = recording_io.load(d, d / "columns.toml")
             t = time.perf_counter()
             rep = diagnose(rec, log=lambda *x: None, plots=False, jobs=a.jobs,
@@ -109,8 +128,8 @@ def main():
             more = [e["effect"] for e in rep.get("effects", [])[1:]]
             if more:
                 est += f"; with {', '.join(more)}"
-            rows.append((case, "|".join(want), got, ok, wall, size, cut))
-            print(f"{case:<24} expected {'|'.join(want):<34} -> {got:<22} ({rep['verdict']}, partial "
+            rows.append((case, "|".join(want), got, ok, wall, size, cut, real))
+            print(f"{a.simulator} r{real} {case:<24} expected {'|'.join(want):<34} -> {got:<22} ({rep['verdict']}, partial "
                   f"{rep['best_partial_candidate']}, explained {rep['explained_share']:.2f}, "
                   f"component {rep.get('component')}) est {est}  {'OK' if ok else 'WRONG'}  {wall:.0f} s",
                   flush=True)
@@ -121,7 +140,15 @@ def main():
     for tr in truths:
         print(f"{tr[:34]:<36}" + " ".join(f"{sum(1 for r in rows if r[1] == tr and r[2] == lab):>14}"
                                           for lab in labels))
+    for real in a.realisation:
+        rr = [r for r in rows if r[7] == real]
+        sz = [r[5] for r in rr if r[5]]
+        ct = [r[6] for r in rr if r[6] is not None]
+        print(f"{a.simulator} realisation {real}: correct {sum(r[3] for r in rr)}/{len(rr)}, sizes within 20 % "
+              f"{sum(abs(z[2]) <= 0.2 for z in sz)}/{len(sz)}, affected RMSE cut >= 50 % "
+              f"{sum(c >= 0.5 for c in ct)}/{len(ct)}")
     sized = [r[5] for r in rows if r[5]]
+    print(f"RESULT simulator={a.simulator} realisations={','.join(map(str, a.realisation))}")
     print(f"RESULT correct={sum(r[3] for r in rows)} total={len(rows)}")
     print(f"RESULT sizes_within_20pct={sum(abs(z[2]) <= 0.2 for z in sized)} of={len(sized)}")
     cuts = [r[6] for r in rows if r[6] is not None]

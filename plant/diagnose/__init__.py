@@ -53,6 +53,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
                                            for p in nref["parameters"]))
     sim0 = nominal_rows[:, ctx.cols]
     pipe_fit = dict(rp.pipe_fit)
+    ctx.height_fit = dict(rp.height_fit)
     ctx.nominal_rows = nominal_rows  # the replayed states, for candidates' plausible()
     ctx.nominal_sim = sim0
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
@@ -122,6 +123,9 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
                                   "T_plant_room_from": rp._T_room_from,
                                   "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in pipe_fit.items()}
+    heights = rp.tank_heights()
+    rep["storage_sensor_places"] = {s: h.public(heights[s.rpartition(".T_sensor_")[0]])
+                                    for s, h in ctx.height_fit.items()}
     _report.flag_bounds(rep, results)
     if out is not None:
         _report.write(rep, out, ctx, nominal_rows, final, plots=plots)

@@ -41,6 +41,7 @@ class Context:
     alone: dict | None = None               # {instances, signals} of a subsystem replayed alone (diagnose)
     calibrated: tuple = ()                  # signals of a subsystem calibrated alone on them (diagnose)
     nominal_ranges: dict = field(default_factory=dict)  # override key -> (lo, hi) the nominal re-fit may take
+    height_fit: dict = field(default_factory=dict)      # storage sensor -> the nominal's sensor_height.HeightFit
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None):

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from . import sensor_height
 from .bounded import descent, from_u, scalar_search, to_u
 from .calibration import STORAGE_SCHEMES, file_scheme
 
@@ -221,6 +222,30 @@ def common_mode(ctx, nominal_sim, j):
 LOCAL_GAIN = 0.35
 
 
+def placed(meas, y, m, hf):
+    """The reading y moved within its sensor's height tolerance to fit meas on mask m
+    (sensor_height.py; hf None: not a storage sensor, y as it is)."""
+    if hf is None:
+        return y
+    g = hf.g[:len(y)]
+    return y + sensor_height.best_shift(meas[:len(y)] - y, g, m[:len(y)], hf.tol) * g
+
+
+def _offset_with_shift(e, m, hf) -> float:
+    """The offset that best removes the residual e on mask m, with the sensor's height shift
+    fitted jointly (least squares on [1, gradient], the shift held within its tolerance): an
+    offset is constant, a shift's reading follows the gradient, so the two separate."""
+    m = m & np.isfinite(e)
+    if hf is None:
+        return float(np.mean(e[m]))
+    g = hf.g[:len(e)][m]
+    A = np.column_stack([np.ones(m.sum()), g])
+    (v, d), *_ = np.linalg.lstsq(A, e[m], rcond=None)
+    if abs(d) > hf.tol:
+        v = float(np.mean(e[m] - np.clip(d, -hf.tol, hf.tol) * g))
+    return float(v)
+
+
 class _Tried(NamedTuple):
     """A sensor candidate fitted on one signal (fit_signal)."""
     key: tuple           # (local and its share passes LOCAL_GAIN, share of its residual removed)
@@ -258,19 +283,24 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         m = ctx.train & ctx.ok[:, j]
         if m.sum() < 10:
             continue
+        # a storage sensor's place within its tolerance is fitted again with the candidate
+        # (sensor_height.py): the twin's reading before the nominal's shift
+        hf = ctx.height_fit.get(s) if c is not None else None
+        if hf is not None:
+            y0 = y0 - hf.shift * hf.g
 
-        def fit_on(y0, m=m, j=j):  # y0: the signal's first len(y0) samples
+        def fit_on(y0, m=m, j=j, hf=hf):  # y0: the signal's first len(y0) samples
             n = len(y0)
             mm, meas, tn = m[:n], ctx.meas[:n, j], t[:n]
 
             def f(v):
-                return float(np.mean((meas[mm] - effect.apply(tn, y0, [v])[mm]) ** 2))
+                return float(np.mean((meas[mm] - placed(meas, effect.apply(tn, y0, [v]), mm, hf)[mm]) ** 2))
             if effect.id == "sensor_offset":
-                v = float(np.clip(np.mean(meas[mm] - y0[mm]), p.lo, p.hi))
+                v = float(np.clip(_offset_with_shift(meas - y0, mm, hf), p.lo, p.hi))
                 return v, f(v), 1, f
             return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
 
-        y_before = y0
+        y_before = placed(ctx.meas[:, j], y0, m, hf)
         v, J, k, f = fit_on(y0)
         nfev += k
         if s in alone:
@@ -308,8 +338,9 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         best = max((x for x in tried if x.tank == best.tank and x.key[0]), key=lambda x: x.removed)
     j, v, f, y0, local, y_before = best.j, best.value, best.cost, best.y0, best.local, best.y_before
     sim = nominal_sim.copy()
-    sim[:, j] = effect.apply(t, y0, [v])
     m = ctx.train & ctx.ok[:, j]
+    hf = ctx.height_fit.get(ctx.measured[j]) if best.tank is not None else None
+    sim[:, j] = placed(ctx.meas[:, j], effect.apply(t, y0, [v]), m, hf)
     se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train)) if effect.id != "sensor_offset" else \
         float(np.std(ctx.meas[m, j] - sim[m, j]) / math.sqrt(ctx.n_eff(ctx.train)))
     r = Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],

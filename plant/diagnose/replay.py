@@ -21,7 +21,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
-from . import pipe_sensor
+from . import pipe_sensor, sensor_height
 
 COMMANDS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set")
 # a command the recording may replace by a measured signal (with a warning)
@@ -129,12 +129,15 @@ class Replayer:
         # models are fitted up to it (pipe_sensor.py); pipe_fit holds the last run's
         self.t_train: float | None = None
         self.pipe_fit: dict = {}
+        # the storage sensors' places within their tolerance (sensor_height.py), the last run's
+        self.height_fit: dict = {}
         # the radiator alone's element count and the instances calibrated on their own subsystem
         # (calibrate_radiator): the nominal re-fit leaves those alone
         self.radiator_elements = 5
         self.calibrated: set = set()
         self._layout()
         self._T_room, self._T_room_from = self._plant_room()
+        self._tank_heights = self.tank_heights()
 
     def _layout(self) -> None:
         from ..compiler import catalogue_of
@@ -181,6 +184,13 @@ class Replayer:
                                   f"columns file's [ports] (house file: {inst.options['storage_top']} m and "
                                   f"{inst.options['storage_bottom']} m)")
         return out
+
+    def tank_heights(self) -> dict:
+        """Height [m] of every storage of the replayed plant, by instance name."""
+        from ..declaration import load
+
+        return {i.name: float(i.params.height) for i in load(self.plant_name).instances.values()
+                if i.kind == "storage" and hasattr(i.params, "height")}
 
     def _plant_room(self) -> tuple:
         """(what the stagnant pipes cool toward, where it comes from): read off the recording's
@@ -266,6 +276,8 @@ class Replayer:
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
         self.pipe_fit = pipe_sensor.apply(self.rec, out, cols, n, self._T_room,
                                           t_fit if self.t_train is not None else None)
+        self.height_fit = sensor_height.apply(self.rec, out, cols, n, self._tank_heights,
+                                              t_fit if self.t_train is not None else None)
         self._checked = True
         return out
 
