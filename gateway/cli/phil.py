@@ -1,0 +1,68 @@
+"""`twin phil HOUSE --bench NAME=HOST:PORT ...`: the simulated side of a house driving the lab's
+emulator benches in real time (phil/loop.py), with its per-interface report."""
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+
+EXAMPLES = """examples:
+  twin bench space_heating --modbus-tcp 127.0.0.1:5031 &
+  twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1
+  twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 60 --typeday 1 --hours 6 --record runs/phil2
+  twin phil lint                       # check every bench map (phil/maps/)
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
+                       epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), or 'lint'")
+    p.add_argument("--bench", action="append", default=[], metavar="NAME=HOST:PORT",
+                   help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address")
+    p.add_argument("--speed", type=float, default=1.0, help="real time x SPEED")
+    p.add_argument("--step", type=float, default=1.0, help="exchange step [s of simulated time]")
+    p.add_argument("--hours", type=float, default=24.0, help="simulated hours after the warm-up")
+    p.add_argument("--typeday", type=int, default=0, help="VDI 4655 type-day block 1-11 (profiles/typedays)")
+    p.add_argument("--warmup", type=float, default=600.0, help="warm-up [s simulated], not counted")
+    p.add_argument("--record", help="run directory: signals.csv, events.csv, meta.json, report.json")
+    p.add_argument("--stale", type=float, help="s (wall) without a good value before a measurement "
+                   "counts as stale (default: the bench map's [phil] stale_s)")
+    p.add_argument("--stop-after", type=float, help="s (wall) without a good value before the safe "
+                   "set-points are sent and the run stops (default: the map's stop_s)")
+    p.add_argument("--timeout", type=float, default=0.5, help="Modbus request timeout [s]")
+    p.add_argument("--retries", type=int, default=1, help="Modbus retries per request")
+    p.add_argument("--stop-file", help="the run stops (safe set-points sent) once this file exists")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from phil.benchmap import lint_bench_maps
+    from phil.loop import PhilLoop, PhilOptions
+    from phil.report import format_report
+    from plant.errors import ConfigError
+
+    if args.house == "lint":
+        problems = lint_bench_maps()
+        print("\n".join(problems) or "bench maps: no problems")
+        return 1 if problems else 0
+    benches = {}
+    for spec in args.bench:
+        name, _, address = spec.partition("=")
+        host, _, port = address.rpartition(":")
+        if not name or not port.isdigit():
+            raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT, e.g. space_heating=127.0.0.1:5031")
+        benches[name] = (host or "127.0.0.1", int(port))
+    if not benches:
+        raise ConfigError("twin phil: no --bench given; e.g. --bench space_heating=127.0.0.1:5031")
+    loop = PhilLoop(args.house, benches, PhilOptions(
+        speed=args.speed, dt=args.step, hours=args.hours, typeday=args.typeday, record=args.record,
+        stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
+        stop_file=args.stop_file, warmup_s=args.warmup))
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: loop.request_stop())
+    report = loop.run()
+    print(format_report(report), flush=True)
+    if not args.record:
+        print(json.dumps(report, default=str))
+    return 0 if report["stop_reason"] == "end of run" else 3
