@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
+import sys
 import threading
 
 EXAMPLES = """examples:
@@ -43,6 +45,13 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(sig, lambda *_: done.set())
     while not done.wait(0.5):
         pass
-    server.stop()
+    stopper = threading.Thread(target=server.stop, daemon=True)
+    stopper.start()
+    stopper.join(3.0)
     print(json.dumps(server.summary(), default=float), flush=True)
+    if stopper.is_alive():
+        # the Modbus server did not shut down within 3 s (seen once after a long run, cause
+        # not found): the summary is out, so leave without waiting for its thread
+        print(f"bench {args.name}: Modbus server did not stop within 3 s; exiting", file=sys.stderr, flush=True)
+        os._exit(0)
     return 0

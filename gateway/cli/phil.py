@@ -11,13 +11,16 @@ EXAMPLES = """examples:
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 60 --typeday 1 --hours 6 --record runs/phil2
   twin phil lint                       # check every bench map (phil/maps/)
+  twin phil table space_heating --format md    # a bench map's register table (csv or md)
 """
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), or 'lint'")
+    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), 'lint' or 'table'")
+    p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path)")
+    p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
     p.add_argument("--bench", action="append", default=[], metavar="NAME=HOST:PORT",
                    help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address")
     p.add_argument("--speed", type=float, default=1.0, help="real time x SPEED")
@@ -46,6 +49,13 @@ def run(args: argparse.Namespace) -> int:
         problems = lint_bench_maps()
         print("\n".join(problems) or "bench maps: no problems")
         return 1 if problems else 0
+    if args.house == "table":
+        from gateway.maps.export import to_csv, to_markdown
+        from phil.benchmap import load_bench_map
+
+        dmap = load_bench_map(args.bench_map or "space_heating").dmap
+        print(to_markdown(dmap) if args.format == "md" else to_csv(dmap), end="")
+        return 0
     benches = {}
     for spec in args.bench:
         name, _, address = spec.partition("=")
