@@ -39,8 +39,9 @@ def _suite(simulator: str):
         from plant.labsim import suite
         return suite.CASES, suite.make_case
     from rigsim import suite
+    # rigsim writes out/<case>/ itself
     return suite.CASES, lambda case, out, days, start, seed, ports, realisation: suite.make_case(
-        case, out, days=days, start=start, realisation=realisation)
+        case, Path(out).parent, days=days, start=start, realisation=realisation)
 
 
 def _plume_litres(rep):

@@ -192,6 +192,7 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         if sig in data:
             warnings.append(f"{sig}: mapped from two columns; the later one ({col!r}) used")
         data[sig] = v
+    _check_places(heights, {sig: col for col, sig in colmap.items()}, mapping)
     dts = np.diff(t)
     med = float(np.median(dts))
     valid = np.ones(len(t), dtype=bool)
@@ -219,6 +220,21 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
     return Samples(str(p), str(start), t, data, warnings, valid,
                    {sig: col for col, sig in colmap.items()}, heights, ports)
+
+
+def _check_places(heights: dict, columns: dict, mapping) -> None:
+    """The twin numbers a storage's sensors from the bottom (T_sensor_1 lowest): declared heights
+    must rise with the number, or the twin cannot place the sensors (its neighbours, gradients and
+    sensor candidates follow the numbering)."""
+    for storage in sorted({s.split(".", 1)[0] for s in heights}):
+        mine = sorted((int(s.rsplit("_", 1)[1]), h, s) for s, h in heights.items() if s.startswith(storage + "."))
+        for (k1, h1, s1), (k2, h2, s2) in zip(mine, mine[1:]):
+            if h2 <= h1:
+                raise ConfigError(
+                    f"{mapping}: [columns] {columns.get(s2, s2)!r} -> {s2} at height {h2:g} is not above "
+                    f"{columns.get(s1, s1)!r} -> {s1} at height {h1:g}: the twin numbers {storage}'s sensors "
+                    f"from the bottom, so it cannot place them; map the lab's columns onto {storage}.T_sensor_N "
+                    "in the order of their heights (the lowest onto the smallest N)")
 
 
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,

@@ -239,3 +239,22 @@ def test_the_shipped_recording_with_date_time_stamps_reads_as_with_seconds(tmp_p
     np.testing.assert_allclose(b.time, a.time[keep], atol=1e-3)
     for s in a.data:
         np.testing.assert_array_equal(b.data[s], a.data[s][keep])
+
+
+def test_storage_sensors_the_twin_cannot_place_are_refused(tmp_path, rec):
+    """Heights that do not rise with the sensor number: the twin numbers a storage's sensors from
+    the bottom, so a lab's columns mapped out of order cannot be placed (named, with the fix)."""
+    import re
+
+    csv, m = _write(tmp_path, rec)
+    text = m.read_text()
+    for k, h in ((3, 0.40), (4, 0.30)):  # sensor 4 declared below sensor 3
+        text = re.sub(rf'^("storage\.T_sensor_{k}") = "storage\.T_sensor_{k}"$',
+                      rf'\1 = {{ signal = "storage.T_sensor_{k}", height = {h} }}', text, flags=re.M)
+    assert "height = 0.3" in text
+    m.write_text(text)
+    with pytest.raises(ConfigError) as exc:
+        recording_io.load(csv, m)
+    msg = str(exc.value)
+    assert str(m) in msg and "storage.T_sensor_4 at height 0.3 is not above" in msg
+    assert "in the order of their heights" in msg
