@@ -29,6 +29,9 @@ def register(sub) -> None:
     p.add_argument("--effects", type=Path, action="append", default=[],
                    help="Python file defining extra candidates (@register); may be repeated")
     p.add_argument("--no-plots", action="store_true")
+    p.add_argument("--require-cut", action="store_true",
+                   help="refuse a recording that measures no boundary a cut can use (instead of replaying "
+                        "the whole house on the twin's building and profiles)")
     p.add_argument("--jobs", type=int, default=None,
                    help="processes for the candidate fits (default: the CPUs available; 1 = in this process)")
     p.add_argument("--requirements", nargs="?", const="house1", metavar="HOUSE",
@@ -63,7 +66,8 @@ def run(args) -> int:
         print(f"warning: {w}", file=sys.stderr)
     rec.warnings = [f"input: {w}" for w in rec.warnings]
     rep = diagnose(rec, house=args.house, out=args.out, train_days=args.train_days,
-                   plots=not args.no_plots, log=lambda m: print(m, file=sys.stderr), jobs=args.jobs)
+                   plots=not args.no_plots, log=lambda m: print(m, file=sys.stderr), jobs=args.jobs,
+                   require_cut=args.require_cut)
     print(rep["finding"])
     print(f"verdict: {rep['verdict']}" + (f"  effect: {rep['effect']} ({rep['component']})" if rep["effect"] else ""))
     for k, p in rep["parameters"].items():

@@ -18,13 +18,15 @@ from .effects import catalogue
 
 
 def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effects=None,
-             plots: bool = True, log=print, refit_nominal: bool = True, jobs: int | None = None) -> dict:
-    """jobs: processes for the candidate fits (default: the CPUs this process may use)."""
+             plots: bool = True, log=print, refit_nominal: bool = True, jobs: int | None = None,
+             require_cut: bool = False) -> dict:
+    """jobs: processes for the candidate fits (default: the CPUs this process may use);
+    require_cut: refuse a recording that allows no cut (cut.select)."""
     timing = {}
     t0 = time.perf_counter()
     warnings = list(rec.warnings)
     warnings += replay.check(rec)
-    rp = replay.Replayer(rec, house)
+    rp = replay.Replayer(rec, house, require_cut=require_cut)
     ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
     rp.t_train = ctx.t_split
     radiator_cal = rp.calibrate_radiator(ctx.train)

@@ -68,12 +68,20 @@ def subsystem(signal: str) -> str:
     return SUBSYSTEM.get(signal.split(".", 1)[0], "other")
 
 
-def select(rec, house: str):
+def select(rec, house: str, required: bool = False):
     """The first cut whose recorded signals the recording holds and whose house file exists
-    (None: the whole house), and whether the mixing station can be replayed alone."""
+    (None: the whole house), and whether the mixing station can be replayed alone. required:
+    a recording that allows no cut is an error naming what each cut lacks (the whole house
+    would replay on the twin's own building and profiles)."""
     from ..errors import ConfigError
     from ..housefile import resolve
 
+    if required and not any(all(rec.has(s) for s in c.bindings.values()) for c in CUTS):
+        lacks = "; ".join(f"cut '{c.name}' needs {', '.join(c.bindings.values())} (missing: "
+                          f"{', '.join(s for s in c.bindings.values() if not rec.has(s))})" for c in CUTS)
+        raise ConfigError(f"{rec.source}: the columns file maps no boundary a cut can use: {lacks}. Map those "
+                          f"columns (`twin diagnose --requirements {house}` lists what each enables), or leave "
+                          "out --require-cut to replay the whole house on the twin's building and profiles")
     for cut in CUTS:
         if not all(rec.has(s) for s in cut.bindings.values()):
             continue

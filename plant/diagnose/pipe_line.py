@@ -221,7 +221,7 @@ def diagnose_pipe(path, log=None) -> dict:
     y0 = pr.replay(rec, base)
     cur = {"bic": bic(y0, rec.T_out, train, 0), "rmse_held": rmse(y0, rec.T_out, held)}
     plain = dict(cur, rmse_train=rmse(y0, rec.T_out, train))
-    chosen, effects, rounds, y = [], [], [], y0
+    chosen, effects, rounds, y, tied = [], [], [], y0, {}
     while len(chosen) < MAX_EFFECTS:
         rows = _round(rec, chosen, base, train, held)
         rounds.append([r[0] for r in rows])
@@ -234,9 +234,9 @@ def diagnose_pipe(path, log=None) -> dict:
             break
         row, cand, base, y = _tie_break(ok)
         chosen.append(cand)
+        tied[cand.name] = row.get("tied_with", [])
         cur = row
-        effects = [_row(rec, c, base, y, train, held, len(chosen)) for c in chosen]
-        effects[-1]["tied_with"] = row.get("tied_with", [])
+        effects = [dict(_row(rec, c, base, y, train, held, len(chosen)), tied_with=tied[c.name]) for c in chosen]
     return {"recording": str(rec.source), "samples": len(rec.time), "train": int(train.sum()),
             "held_out": int(held.sum()), "block_s": block, "delay_s": rec.delay(),
             "rmse_plain": plain["rmse_held"], "rmse_plain_train": plain["rmse_train"],

@@ -96,12 +96,12 @@ class Replayer:
     `run(overrides)` -> simulated rows at the samples, in house 1's catalogue order (NaN for the
     signals the replayed plant does not simulate; a bound boundary column holds the recording)."""
 
-    def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True):
+    def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True, require_cut: bool = False):
         self.rec = rec
         self.house_name = house
         self.init_from_sensors = init_from_sensors
         self.t = rec.time
-        self.cut, self.circuit = cut_mod.select(rec, house)
+        self.cut, self.circuit = cut_mod.select(rec, house, required=require_cut)
         self.radiator = cut_mod.radiator_alone(rec, self.cut)
         removed = set(self.cut.removes) if self.cut else set()
         self.removed = removed

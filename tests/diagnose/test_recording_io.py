@@ -258,3 +258,17 @@ def test_storage_sensors_the_twin_cannot_place_are_refused(tmp_path, rec):
     msg = str(exc.value)
     assert str(m) in msg and "storage.T_sensor_4 at height 0.3 is not above" in msg
     assert "in the order of their heights" in msg
+
+
+def test_a_recording_that_allows_no_cut_is_refused_when_a_cut_is_required(tmp_path, rec):
+    from plant.diagnose.replay import Replayer
+
+    keep = {k: v for k, v in rec.data.items() if k not in ("mixer.m_flow", "dhw.m_flow_hot")}
+    csv, m = _write(tmp_path, type(rec)(rec.source, rec.start, rec.time, keep))
+    r = recording_io.load(csv, m)
+    assert Replayer(r).cut is None  # by default: the whole house, on the twin's profiles
+    with pytest.raises(ConfigError) as exc:
+        Replayer(r, require_cut=True)
+    msg = str(exc.value)
+    assert "maps no boundary a cut can use" in msg and "missing: mixer.m_flow" in msg and "dhw.m_flow_hot" in msg
+    assert "twin diagnose --requirements house1" in msg
