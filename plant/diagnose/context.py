@@ -12,6 +12,10 @@ from .replay import comparable
 
 # normalisation of residuals per unit, so that one cost adds temperatures, flows and powers
 SCALE = {"degC": 1.0, "kg/s": 0.02, "W": 500.0}
+# a mismatch: a held-out residual above MISMATCH_TOL x scale + NOISE_SIGMAS x the signal's noise
+# (Context.limit; labsim's no-effect case, chosen there: 0.3 K, 6 g/s, 150 W)
+MISMATCH_TOL = 0.3
+NOISE_SIGMAS = 3.0
 
 MODES = {
     "chp_on": "CHP on",
@@ -113,6 +117,13 @@ class Context:
         v = mse / self.scale ** 2
         idx = [self.measured.index(s) for s in signals if s in self.measured]
         return float(np.nanmean(v[idx] if idx else v))
+
+    def limit(self, j, tol: float = None) -> float | np.ndarray:
+        """The one mismatch limit of signal(s) j, in its unit: what a correct replay may leave
+        (tol of its scale, MISMATCH_TOL unless given: replay timing, an independent plant's
+        structure; 0 for a subsystem calibrated alone on that very signal) plus NOISE_SIGMAS of
+        its noise."""
+        return (MISMATCH_TOL if tol is None else tol) * self.scale[j] + NOISE_SIGMAS * self.noise[j]
 
     def noise_cost(self) -> float:
         return float(np.nanmean((self.noise / self.scale) ** 2))

@@ -352,11 +352,11 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         r.local = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
                    "heldout_rms_after": float(np.sqrt(np.mean(e1 ** 2))),
                    "gain": 1.0 - float(np.mean(e1 ** 2)) / max(float(np.mean(e0 ** 2)), 1e-12),
-                   "limit": 0.3 * ctx.scale[j] + 3.0 * ctx.noise[j],
+                   "limit": ctx.limit(j),
                    "neighbours": [ctx.measured[k] for k in neighbours(ctx, j)]}
         if ctx.measured[j] in alone:
             # calibrated on this very signal, the subsystem alone has no structural allowance to
             # keep: its residual is a mismatch above the sensor's noise (3 sigma)
             r.local["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
-            r.local["limit"] = 3.0 * ctx.noise[j]
+            r.local["limit"] = ctx.limit(j, tol=0.0)
     return r

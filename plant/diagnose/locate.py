@@ -9,7 +9,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..units import UNITS
 from ..water import CP, RHO
-from .context import MODES
+from .context import MISMATCH_TOL, MODES
 from .cut import subsystem
 
 KWH = UNITS["kWh"].factor  # J in one kWh (3.6e6)
@@ -134,7 +134,7 @@ def subsystems(ctx, sim: np.ndarray, mask: np.ndarray, mismatched: list[str]) ->
     return out
 
 
-def mismatched_signals(ctx, sim, mask, tol: float = 0.3, tol_rms: float = 1.0) -> list[str]:
+def mismatched_signals(ctx, sim, mask, tol: float = MISMATCH_TOL, tol_rms: float = 1.0) -> list[str]:
     """Signals with a mismatch beyond replay and sensor accuracy (held-out window):
       * persistent: |bias| or the robust spread of the residual above tol x scale + 3 noise sigma
         (not switching spikes: a command edge replayed up to half a sample late makes short
@@ -152,15 +152,15 @@ def mismatched_signals(ctx, sim, mask, tol: float = 0.3, tol_rms: float = 1.0) -
         if s not in m:
             continue
         own = 0.0 if s in ctx.calibrated else 1.0
-        lim = own * tol * ctx.scale[j] + 3.0 * ctx.noise[j]
-        lim_rms = own * tol_rms * ctx.scale[j] + 3.0 * ctx.noise[j]
+        lim = ctx.limit(j, own * tol)
+        lim_rms = ctx.limit(j, own * tol_rms)
         transient = CATALOGUE.signal(s).unit == "degC" and m[s]["rmse"] > lim_rms
         if abs(m[s]["bias"]) > lim or m[s]["robust"] > lim or transient:
             out.append(s)
     return out
 
 
-def moved_signals(ctx, before, after, mask, tol: float = 0.3) -> list[str]:
+def moved_signals(ctx, before, after, mask, tol: float = MISMATCH_TOL) -> list[str]:
     """Signals a fitted effect acts on: where its run differs from the run without it by more
     than the persistent-mismatch tolerance of mismatched_signals (tol x scale + 3 noise sigma, RMS
     over the scored samples of the window), whether the change brings them closer or not."""
@@ -170,7 +170,7 @@ def moved_signals(ctx, before, after, mask, tol: float = 0.3) -> list[str]:
     for j, s in enumerate(ctx.measured):
         with np.errstate(invalid="ignore"):
             rms = float(np.sqrt(np.nanmean(d[:, j] ** 2))) if np.isfinite(d[:, j]).any() else 0.0
-        if rms > tol * ctx.scale[j] + 3.0 * ctx.noise[j]:
+        if rms > ctx.limit(j, tol):
             out.append(s)
     return out
 

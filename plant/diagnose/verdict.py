@@ -99,7 +99,7 @@ def _alone(r, ctx) -> dict | None:
     sc = ctx.scale[idx] ** 2
     c0 = float(np.nanmean(ctx.per_signal_mse(ctx.nominal_sim, ctx.held)[idx] / sc))
     c1 = float(np.nanmean(ctx.per_signal_mse(r.sim, ctx.held)[idx] / sc))
-    lim = float(np.mean(0.3 + 3.0 * ctx.noise[idx] / ctx.scale[idx]))
+    lim = float(np.mean(ctx.limit(idx) / ctx.scale[idx]))
     return {"heldout_rms_before": math.sqrt(c0), "heldout_rms_after": math.sqrt(c1),
             "gain": 1.0 - c1 / max(c0, 1e-12), "limit": lim, "neighbours": [],
             "what": f"{', '.join(ctx.measured[j] for j in idx)} (replayed alone)"}
