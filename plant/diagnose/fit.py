@@ -231,21 +231,6 @@ def placed(meas, y, m, hf):
     return y + sensor_height.best_shift(meas[:len(y)] - y, g, m[:len(y)], hf.tol) * g
 
 
-def _offset_with_shift(e, m, hf) -> float:
-    """The offset that best removes the residual e on mask m, with the sensor's height shift
-    fitted jointly (least squares on [1, gradient], the shift held within its tolerance): an
-    offset is constant, a shift's reading follows the gradient, so the two separate."""
-    m = m & np.isfinite(e)
-    if hf is None:
-        return float(np.mean(e[m]))
-    g = hf.g[:len(e)][m]
-    A = np.column_stack([np.ones(m.sum()), g])
-    (v, d), *_ = np.linalg.lstsq(A, e[m], rcond=None)
-    if abs(d) > hf.tol:
-        v = float(np.mean(e[m] - np.clip(d, -hf.tol, hf.tol) * g))
-    return float(v)
-
-
 class _Tried(NamedTuple):
     """A sensor candidate fitted on one signal (fit_signal)."""
     key: tuple           # (local and its share passes LOCAL_GAIN, share of its residual removed)
@@ -295,8 +280,9 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
 
             def f(v):
                 return float(np.mean((meas[mm] - placed(meas, effect.apply(tn, y0, [v]), mm, hf)[mm]) ** 2))
-            if effect.id == "sensor_offset":
-                v = float(np.clip(_offset_with_shift(meas - y0, mm, hf), p.lo, p.hi))
+            v = effect.solve(meas - y0, mm, hf)
+            if v is not None:
+                v = float(np.clip(v, p.lo, p.hi))
                 return v, f(v), 1, f
             return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
 
@@ -341,8 +327,9 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     m = ctx.train & ctx.ok[:, j]
     hf = ctx.height_fit.get(ctx.measured[j]) if best.tank is not None else None
     sim[:, j] = placed(ctx.meas[:, j], effect.apply(t, y0, [v]), m, hf)
-    se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train)) if effect.id != "sensor_offset" else \
-        float(np.std(ctx.meas[m, j] - sim[m, j]) / math.sqrt(ctx.n_eff(ctx.train)))
+    se = effect.stderr(ctx.meas[m, j] - sim[m, j], ctx.n_eff(ctx.train))
+    if se is None:
+        se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train))
     r = Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
                train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                evaluations=nfev, sim=sim, effect=effect)

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from plant.diagnose import sensor_height
-from plant.diagnose.fit import _offset_with_shift, placed
+from plant.diagnose.effects.sensor import SensorOffset
+from plant.diagnose.fit import placed
 from plant.diagnose.sensor_height import HeightFit
 
 
@@ -62,7 +63,7 @@ def test_an_offset_fitted_with_the_shift_free_is_not_taken_by_it():
     meas = y + 1.5 + rng.normal(0, 0.05, len(t))          # a 1.5 K offset at the declared place
     m = np.ones(len(t), bool)
     hf = HeightFit(0.0, sensor_height.SLEEVE_TOL_M / H + sensor_height.GEOMETRY_TOL * z5, g)
-    v = _offset_with_shift(meas - y, m, hf)
+    v = SensorOffset().solve(meas - y, m, hf)
     assert v == pytest.approx(1.5, abs=0.1)
     # the shift alone removes little of an offset (it must follow the gradient)
     alone = placed(meas, y, m, hf)

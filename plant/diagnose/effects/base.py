@@ -54,6 +54,17 @@ class Effect:
     def apply(self, t: np.ndarray, y: np.ndarray, theta) -> np.ndarray:
         raise NotImplementedError
 
+    def solve(self, e: np.ndarray, m: np.ndarray, shift) -> float | None:
+        """kind "signal": the parameter in closed form from the residual e = measured - simulated
+        on mask m (shift: the sensor's height freedom, fit.placed; None without), or None: fitted
+        by a bounded search instead."""
+        return None
+
+    def stderr(self, e: np.ndarray, n_eff: float) -> float | None:
+        """kind "signal": the standard error of a closed-form parameter from the residual e left
+        after it (None: from the cost's curvature)."""
+        return None
+
     def fitted(self, ctx) -> list[int]:
         """Indices of the parameters the recording can identify (the others stay at their
         nominal value); default: all. Counted as the candidate's k in the BIC."""

@@ -1,6 +1,8 @@
 """Sensor candidates (post-processing of one simulated signal): lag, offset, transport delay."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -57,6 +59,23 @@ class SensorOffset(Effect):
 
     def apply(self, t, y, theta):
         return y + float(theta[0])
+
+    def solve(self, e, m, shift):
+        """The mean residual; with the sensor's height free, the two jointly by least squares on
+        [1, gradient], the shift within its tolerance: an offset is constant, a shift's reading
+        follows the gradient, so the two separate."""
+        m = m & np.isfinite(e)
+        if shift is None:
+            return float(np.mean(e[m]))
+        g = shift.g[:len(e)][m]
+        A = np.column_stack([np.ones(m.sum()), g])
+        (v, d), *_ = np.linalg.lstsq(A, e[m], rcond=None)
+        if abs(d) > shift.tol:
+            v = float(np.mean(e[m] - np.clip(d, -shift.tol, shift.tol) * g))
+        return float(v)
+
+    def stderr(self, e, n_eff):
+        return float(np.std(e) / math.sqrt(n_eff))
 
     def summary(self, theta, ctx, sim=None):
         return f"sensor offset {theta[0]:+.2f} K"
