@@ -21,7 +21,6 @@ import importlib.util
 import os
 import re
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
@@ -31,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 from pymodbus.client import ModbusTcpClient
+
+from gateway.loopback import free_port, wait_port
 
 HERE = Path(__file__).resolve().parent
 UNIT, COUNT = 5, 10  # storage_io (unit 5) maps input registers 0..9 in house 1
@@ -94,26 +95,6 @@ def build_c(out: Path) -> dict[str, Path]:
         subprocess.run(["gcc", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-Wall", "-Wextra", "-Werror",
                         "-o", str(exe[name]), str(HERE / "c" / f"{name}.c"), *flags.stdout.split()], check=True)
     return exe
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_port(port: int, timeout: float = 60.0, proc: subprocess.Popen | None = None) -> None:
-    end = time.time() + timeout
-    while time.time() < end:
-        if proc is not None and proc.poll() is not None:
-            out = proc.communicate()[0] if proc.stdout else ""
-            raise RuntimeError(f"server for port {port} exited with {proc.returncode}: {(out or '').strip()[-2000:]}")
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return
-        except OSError:
-            time.sleep(0.1)
-    raise RuntimeError(f"server on port {port} did not come up")
 
 
 def pin(pid: int, cpus: set[int]) -> None:

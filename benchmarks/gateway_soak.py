@@ -22,7 +22,6 @@ import struct
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -31,28 +30,12 @@ import numpy as np
 from pymodbus.client import ModbusTcpClient
 
 from gateway.maps.loader import load_map
+from gateway.loopback import free_port, wait_port
 
 REPO = Path(__file__).resolve().parents[1]
 CHP = load_map(REPO / "devices/chp_neotower2.toml")
 IO = load_map(REPO / "devices/storage_io.toml")
 NODE = CHP.canopen.node_id
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_port(port: int, timeout: float = 60.0) -> None:
-    end = time.time() + timeout
-    while time.time() < end:
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return
-        except OSError:
-            time.sleep(0.1)
-    raise RuntimeError(f"nothing listens on port {port} after {timeout:g} s")
 
 
 def rss_mb(pid: int) -> float:

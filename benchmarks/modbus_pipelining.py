@@ -20,27 +20,12 @@ import sys
 import time
 from pathlib import Path
 
+from gateway.loopback import free_port, wait_port
+
 REPO = Path(__file__).resolve().parents[1]
 
 #: (unit, function, address, count): registers house 1 maps (boiler unit 2, storage I/O unit 5)
 TRIPLE = ((2, 3, 449, 2), (5, 4, 0, 10), (2, 3, 198, 1))
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_port(port: int, timeout: float = 120.0) -> None:
-    end = time.time() + timeout
-    while time.time() < end:
-        try:
-            with socket.create_connection(("127.0.0.1", port), timeout=0.5):
-                return
-        except OSError:
-            time.sleep(0.1)
-    raise RuntimeError(f"nothing listens on port {port} after {timeout:g} s")
 
 
 def request(tid: int, unit: int, fc: int, address: int, count: int) -> bytes:
