@@ -137,6 +137,7 @@ class PipeFit(NamedTuple):
     tau: float
     mass: float
     fitted: bool = False
+    borrowed: bool = False   # the branch never stood in the fit's samples: the others' median tau
 
 
 AS_SIMULATED_FIT = PipeFit(AS_SIMULATED, MASS_RANGE[0])
@@ -173,7 +174,7 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
     name -> column of the signals the replay computes. -> {flow signal: PipeFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
-    fits = {}
+    fits, unseen = {}, {}
     for flow, sensors in branches().items():
         if flow not in cols or not any(s in cols for s in sensors):
             continue
@@ -185,9 +186,21 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
         pf = AS_SIMULATED_FIT
         if use.sum() >= 10 and any(v is not None for v in meas.values()):
             pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None])
+        elif t_fit is not None and any(v is not None for v in meas.values()):
+            unseen[flow] = (m, fluid)
         for s in sensors:
             out[:, cols[s]] = cooled(t, fluid[s], m, pf, T_room)
         fits[flow] = pf
+    # a measured branch that never stood while the fit's samples ran (a CHP running through the
+    # training days) takes the median cooling of the branches that did: same plant room, the same
+    # kind of pipe; the replay's own stagnant fluid would hold the unit's temperature for hours
+    cooling = [f.tau for f in fits.values() if 0 < f.tau < math.inf]
+    if cooling:
+        borrowed = PipeFit(float(np.median(cooling)), MASS_RANGE[0], borrowed=True)
+        for flow, (m, fluid) in unseen.items():
+            for s, y in fluid.items():
+                out[:, cols[s]] = cooled(t, y, m, borrowed, T_room)
+            fits[flow] = borrowed
     return fits
 
 
@@ -231,7 +244,8 @@ def public(fit: PipeFit) -> dict:
     cools = 0 < fit.tau < math.inf
     return {"tau_s": fit.tau if cools else None,
             "reading": "cools" if cools else "holds" if fit.tau else "as simulated",
-            "pipe_water_kg": fit.mass if fit.fitted else None, "at_bound": at_bound(fit)}
+            "pipe_water_kg": fit.mass if fit.fitted else None, "at_bound": at_bound(fit),
+            "tau_from": "the other branches (this one never stood in training)" if fit.borrowed else "fitted"}
 
 
 def at_bound(fit: PipeFit) -> bool:
