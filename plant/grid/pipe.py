@@ -35,7 +35,8 @@ Options (default off: the pipe is then exactly the one above, bit for bit)
   exchange heat rho cp A D (T_i - T_j) / (distance of their centres), applied implicitly (backward
   Euler, unconditionally stable) in `lose()` over the same dt; the exchange is pairwise, so it
   moves no energy in or out. The parcels are then its grid: none is merged beyond 1/CELLS of the
-  pipe's water (32 cells; a front spread over less than a cell is resolved no finer). For turbulent pipe flow Taylor (1954) gives D = 10.1 r u*
+  pipe's water (32 cells; a front spread over less than a cell is resolved no finer). For
+  turbulent pipe flow Taylor (1954) gives D = 10.1 r u*
   (r the radius, u* the friction velocity): `taylor_dispersion()`.
 The pipe's energy() includes the wall nodes, so in - out - loss - change of energy() closes to
 round-off with either option on.

@@ -71,7 +71,8 @@ def test_steady_loss_with_the_wall_on_is_the_exponential_decay_over_the_pipe():
         p.lose(1.0, T_env)
         M, H = p.push(m_dot * 1.0, 52.0)
     T_out = T_env + (52.0 - T_env) * math.exp(-U * L / (m_dot * CP))
-    assert H / (M * CP) == pytest.approx(T_out, abs=1e-4)   # 0.04 % of the 0.25 K drop: the 1 s steps quantise the residence time
+    # 1e-4 K is 0.04 % of the 0.25 K drop: the 1 s steps quantise the residence time
+    assert H / (M * CP) == pytest.approx(T_out, abs=1e-4)
 
 
 def test_dispersion_smears_a_front_like_the_advection_dispersion_solution():
