@@ -85,8 +85,34 @@ def ashrae_hourly(ctx, sim: np.ndarray, mask: np.ndarray) -> dict:
 MODEL_TOL_K = 5.0
 
 
+# Guideline 14's hourly CV(RMSE) limit judges scatter as well as bias. On a rig the twin shares
+# no code with, a replay's scatter comes from how its units start, stop and modulate against the
+# lab's (rigsim's boiler: 33-37 % held-out with 2 % bias and no effect), which no calibration
+# removes and which is there in every window. The scatter a flow or power may show is therefore
+# estimated from the recording: the calibrated nominal's CV(RMSE) on the training window times
+# SCATTER_MARGIN (two days estimate it to about that), when that is above the Guideline's 30 %.
+# The bias limit stays the Guideline's 10 %: a missing effect on energy (a fouled boiler, 12 %) is
+# a bias. Chosen on rigsim's realisation-1 null_a, reported on labsim's realisation 2 and the rest.
+SCATTER_MARGIN = 1.25
+
+
+def scatter_limit(ctx, s: str) -> float:
+    """The hourly CV(RMSE) [%] flow or power s may show on held-out data (see SCATTER_MARGIN)."""
+    if ctx.nominal_sim is None:
+        return ASHRAE_CV_MAX
+    train = ashrae_hourly(ctx, ctx.nominal_sim, ctx.train).get(s)
+    return max(ASHRAE_CV_MAX, SCATTER_MARGIN * train["cvrmse_pct"]) if train else ASHRAE_CV_MAX
+
+
+def within_accuracy(ctx, s: str, hourly: dict) -> bool:
+    """A flow or power's held-out hourly figures (ashrae_hourly's entry) within the replay's
+    accuracy: |NMBE| <= Guideline 14's and CV(RMSE) <= scatter_limit."""
+    return abs(hourly["nmbe_pct"]) <= ASHRAE_NMBE_MAX and hourly["cvrmse_pct"] <= scatter_limit(ctx, s)
+
+
 def beyond_tolerance(ctx, sim: np.ndarray, mask: np.ndarray) -> list[str]:
-    """Signals whose held-out mismatch is well above the replay's accuracy (MODEL_TOL_K, G14)."""
+    """Signals whose held-out mismatch is well above the replay's accuracy (MODEL_TOL_K;
+    flows and powers: within_accuracy)."""
     m = metrics(ctx, sim, mask)
     g = ashrae_hourly(ctx, sim, mask)
     out = []
@@ -96,7 +122,7 @@ def beyond_tolerance(ctx, sim: np.ndarray, mask: np.ndarray) -> list[str]:
         if CATALOGUE.signal(s).unit == "degC":
             if abs(m[s]["bias"]) > MODEL_TOL_K:
                 out.append(s)
-        elif s in g and not g[s]["meets_guideline_14"]:
+        elif s in g and not within_accuracy(ctx, s, g[s]):
             out.append(s)
     return out
 

@@ -211,9 +211,10 @@ MOVED = 0.10
 
 
 def g14_left(ctx, nominal_sim, r, idx_aff) -> list:
-    """Energy/flow signals among the mismatched ones the candidate moves (MOVED) that still fail
-    Guideline 14's hourly acceptance on the held-out window after its fit."""
-    from .locate import ashrae_hourly
+    """Energy/flow signals among the mismatched ones the candidate moves (MOVED) that are still
+    beyond the replay's accuracy (Guideline 14's bias, the scatter estimated from the recording:
+    locate.within_accuracy) on the held-out window after its fit."""
+    from .locate import ashrae_hourly, within_accuracy
 
     idx = [j for j in moved(ctx, nominal_sim, r.sim, idx_aff)
            if abs(ctx.per_signal_mse(r.sim, ctx.held)[j] - ctx.per_signal_mse(nominal_sim, ctx.held)[j])
@@ -221,7 +222,8 @@ def g14_left(ctx, nominal_sim, r, idx_aff) -> list:
     if not idx:
         return []
     g = ashrae_hourly(ctx, r.sim, ctx.held)
-    return [ctx.measured[j] for j in idx if g.get(ctx.measured[j], {}).get("meets_guideline_14") is False]
+    return [ctx.measured[j] for j in idx if ctx.measured[j] in g and g[ctx.measured[j]]["meets_guideline_14"] is not None
+            and not within_accuracy(ctx, ctx.measured[j], g[ctx.measured[j]])]
 
 
 def moved(ctx, nominal_sim, sim, idx) -> list:
