@@ -1,8 +1,9 @@
 """Calibrate the nominal structure the recording can pin down, before and beside the candidates.
 
 Nominal re-fit (NOMINAL_REFIT): a few nominal twin parameters that are uncertain in the house
-file but matter for replay are re-fitted within narrow bounds (+-10..15 % of the file value) on
-the training window, (1) for the nominal model alone, so the "before" baseline is the best nominal
+file but matter for replay are re-fitted within bounds on the training window (narrow, +-10 % of
+the file value, or a rig's declared tolerance: the storage loss +-40 %, the DHW coil +-25 %, the
+CHP's water and metal 2.5-30 l), (1) for the nominal model alone, so the "before" baseline is the best nominal
 twin (refit_nominal), and (2) jointly with each simulate-kind candidate's own parameters (one
 bounded Brent pass over them after the candidate's fit, then a local pass over the candidate's
 parameters again). The narrow bounds keep them from soaking up a missing effect. They count for
