@@ -19,7 +19,10 @@ from phil.emulator.server import BenchServer
 from phil.loop import PhilLoop, PhilOptions
 
 ROOT = Path(__file__).resolve().parents[2]
-SPEED = 300.0
+# 150x real time at 2 s steps: 13 ms a step for the exchange and the model (median ~1 ms on a
+# quiet 2-core machine; 7 ms median, 36 ms p99 with four other processes busy, where 300x fell
+# behind and the two paced clocks parted)
+SPEED = 150.0
 
 
 def _bench_process(*extra: str, speed: float = SPEED) -> tuple[subprocess.Popen, int]:
@@ -50,7 +53,7 @@ def test_sf1_space_heating_heat_agrees_with_the_bench(tmp_path):
         report = loop.run()
     finally:
         proc.send_signal(signal.SIGTERM)
-        out, _ = proc.communicate(timeout=10)
+        out, _ = proc.communicate(timeout=30)
     b = report["benches"]["space_heating"]
     print(json.dumps(b, indent=1, default=str))
     assert report["stop_reason"] == "end of run"
@@ -67,14 +70,14 @@ def test_sf1_space_heating_heat_agrees_with_the_bench(tmp_path):
 
 
 def test_bench_below_the_requested_flow_cools_the_room_and_reports_the_deficit(tmp_path):
-    proc, port = _bench_process("--param", "m_flow_max=0.004", speed=600.0)     # 0.24 l/min
+    proc, port = _bench_process("--param", "m_flow_max=0.004", speed=300.0)     # 0.24 l/min
     try:
         loop = PhilLoop("house1", {"space_heating": ("127.0.0.1", port)},
-                        PhilOptions(speed=600.0, dt=4.0, hours=2.0, typeday=1, warmup_s=120.0))
+                        PhilOptions(speed=300.0, dt=4.0, hours=2.0, typeday=1, warmup_s=120.0))
         report = loop.run()
     finally:
         proc.send_signal(signal.SIGTERM)
-        proc.communicate(timeout=10)
+        proc.communicate(timeout=30)
     b, room = report["benches"]["space_heating"], report["room"]
     assert b["follow_rms"]["SFW_HCRLbM_Set_l_per_min"] > 1.0      # requested far above what it gives
     assert room["T_room_min_degC"] < 20.7 and room["degree_hours_below_set_Kh"] > 0.2
@@ -144,7 +147,7 @@ def test_stale_bench_process_stopped_then_killed(tmp_path):
         report = loop.run()
     finally:
         proc.kill()
-        proc.wait(timeout=10)
+        proc.wait(timeout=30)
     assert "no good value" in report["stop_reason"] and "space_heating." in report["stop_reason"]
     kinds = {e["reason"].split(":")[0].replace("stale (", "") for e in _events(tmp_path / "run")
              if e["kind"] == "rejected"}
