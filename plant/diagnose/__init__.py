@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import time
 
+from ..catalogue import CATALOGUE
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, recording_io, replay, search  # noqa: F401
+from . import unit_modes
 from . import verdict as verdict_mod
 from .context import Context
 from .effects import catalogue
@@ -40,6 +42,9 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
             + f", supply RMS {mixer_cal['rms_file_K']:.3g} -> {mixer_cal['rms_K']:.3g} K")
     nominal_rows = rp.run()
     warnings += rp.notes + rp.boundary_check(nominal_rows)
+    # a unit's own modes the twin lacks (a boiler's lock-out) are not scored (unit_modes.py)
+    modes = unit_modes.identify(rec, nominal_rows, CATALOGUE.index)
+    unit_modes.apply(ctx, modes)
     sim_file = nominal_rows[:, ctx.cols]
     # nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds): the baseline is the best nominal twin
     nref = {"parameters": [], "params": []}
@@ -125,6 +130,7 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
                                   "T_plant_room_from": rp._T_room_from,
                                   "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in pipe_fit.items()}
+    rep["unit_modes"] = unit_modes.public(modes)
     heights = rp.tank_heights()
     rep["storage_sensor_places"] = {s: h.public(heights[s.rpartition(".T_sensor_")[0]])
                                     for s, h in ctx.height_fit.items()}

@@ -1,0 +1,72 @@
+"""Operating modes of a unit the twin cannot represent: identified, reported, kept from blocking.
+
+A real unit has protections and habits of its own that the twin's model of it lacks: a boiler
+that locks out while its return is too hot and fires again below a release temperature, a CHP
+that trips. While the recording's unit runs and the replay's does not (or the reverse), every
+signal of that unit differs by its whole output, an hour at a time: rigsim's boiler locked out
+at 0.75 % of the samples (with 0.37 % of run-on the other way) and its heat and gas failed
+Guideline 14 hourly (33-37 % CV) in a case with no effect, which made every verdict
+`unexplained_mismatch`.
+
+So after the first nominal replay, the samples where a unit's recorded running state (its
+measured output above a threshold) differs from the replay's are identified per unit, reported
+(`unit_modes` in report.json: samples, share of the unit's running samples, why) and not scored
+for that unit's own signals. A missing effect that changes how much a running unit gives (a
+fouled boiler: 12 % less heat) leaves the states alike and stays scored. When the states differ
+at more than MAX_SHARE of the unit's running samples it is no longer a mode of the unit but a
+difference in how it is run: nothing is masked, and the report says so.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+# unit -> (the signal whose recorded value says it runs, the threshold in its unit)
+RUNNING = {"boiler": ("boiler.Q_flow", 500.0), "chp": ("chp.P_el", 200.0)}
+# a fifth of the unit's running samples: a lock-out or a trip is occasional; beyond it the
+# states differ because the unit is run differently, which is for the diagnosis to see
+MAX_SHARE = 0.2
+
+
+def identify(rec, rows: np.ndarray, catalogue_index) -> dict:
+    """{unit: {mask (samples whose state differs), samples, share, masked, why}} for the units the
+    recording measures; rows: a replay's catalogue rows; catalogue_index: name -> column."""
+    out = {}
+    n = len(rows)
+    for unit, (sig, thr) in RUNNING.items():
+        if not rec.has(sig):
+            continue
+        meas = rec.data[sig][:n]
+        sim = rows[:, catalogue_index(sig)]
+        ok = np.isfinite(meas) & np.isfinite(sim)
+        runs_lab, runs_twin = (meas > thr) & ok, (sim > thr) & ok
+        differ = runs_lab != runs_twin
+        running = int((runs_lab | runs_twin).sum())
+        share = float(differ.sum() / running) if running else 0.0
+        masked = bool(differ.any() and share <= MAX_SHARE)
+        out[unit] = {"mask": differ if masked else np.zeros(n, bool), "samples": int(differ.sum()),
+                     "lab_runs_twin_not": int((runs_lab & ~runs_twin).sum()),
+                     "twin_runs_lab_not": int((runs_twin & ~runs_lab).sum()),
+                     "share_of_running": share, "masked": masked,
+                     "why": ("occasional states the twin's unit model does not have (a lock-out, a trip, a "
+                             "run-on): those samples are not scored for the unit's own signals" if masked else
+                             f"the states differ at {100 * share:.0f} % of the running samples (> "
+                             f"{100 * MAX_SHARE:.0f} %): scored, as a difference in how the unit is run")
+                     if differ.any() else "the recorded and replayed states agree"}
+    return out
+
+
+def apply(ctx, modes: dict) -> None:
+    """Drop the masked samples from the scoring of each unit's own signals (ctx.ok)."""
+    for unit, m in modes.items():
+        if not m["masked"]:
+            continue
+        for j, s in enumerate(ctx.measured):
+            if s.split(".", 1)[0] == unit:
+                ctx.ok[: len(m["mask"]), j] &= ~m["mask"]
+
+
+def public(modes: dict) -> dict:
+    return {u: {k: v for k, v in m.items() if k != "mask"} for u, m in modes.items()}
+
+
+__all__ = ["identify", "apply", "public", "RUNNING", "MAX_SHARE"]
