@@ -1,0 +1,54 @@
+"""A unit's own modes the twin lacks (plant/diagnose/unit_modes.py): occasional state
+differences are masked for that unit's signals only; a unit run differently is not."""
+import numpy as np
+
+from plant.diagnose import unit_modes
+
+
+class _Rec:
+    def __init__(self, data):
+        self.data = data
+
+    def has(self, s):
+        return s in self.data
+
+
+class _Ctx:
+    def __init__(self, measured, n):
+        self.measured = measured
+        self.ok = np.ones((n, len(measured)), bool)
+
+
+def _boiler(n, on, lockout):
+    q = np.where(on, 15000.0, 0.0)
+    lab = q.copy()
+    lab[lockout] = 0.0                    # the lab's boiler locks out; the twin's fires on
+    return lab, q
+
+
+def test_a_lockout_is_masked_for_the_units_own_signals_only():
+    n = 1000
+    on = (np.arange(n) // 50) % 2 == 1    # runs half the time
+    lockout = np.zeros(n, bool)
+    lockout[[60, 61, 62, 160, 161]] = True
+    lab, twin = _boiler(n, on, lockout)
+    rows = np.column_stack([twin])
+    modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), rows, {"boiler.Q_flow": 0}.__getitem__)
+    m = modes["boiler"]
+    assert m["masked"] and m["samples"] == 5 and m["lab_runs_twin_not"] == 0 and m["twin_runs_lab_not"] == 5
+    assert m["share_of_running"] == 5 / on.sum()
+    ctx = _Ctx(["boiler.Q_flow", "boiler.T_sup", "storage.T_sensor_5"], n)
+    unit_modes.apply(ctx, modes)
+    assert (~ctx.ok[:, 0]).sum() == 5 and (~ctx.ok[:, 1]).sum() == 5 and ctx.ok[:, 2].all()
+    assert "mask" not in unit_modes.public(modes)["boiler"]
+
+
+def test_a_unit_run_differently_is_not_masked():
+    n = 1000
+    on = (np.arange(n) // 50) % 2 == 1
+    lab, twin = _boiler(n, on, on & (np.arange(n) % 3 == 0))   # a third of its running samples
+    modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), np.column_stack([twin]),
+                                {"boiler.Q_flow": 0}.__getitem__)
+    m = modes["boiler"]
+    assert not m["masked"] and m["share_of_running"] > unit_modes.MAX_SHARE and not m["mask"].any()
+    assert "scored" in m["why"]
