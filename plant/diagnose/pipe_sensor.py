@@ -183,12 +183,6 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
         fluid = {s: out[:, cols[s]].copy() for s in sensors}
         meas = {s: rec.data[s][:n] if rec.has(s) else None for s in sensors}
         use = fit & (m <= FLOWING)
-        # and the recording's branch stands too (its flow, else its command): where the replay's
-        # unit has not started yet but the lab's has, the sensor reads fresh fluid, and those
-        # samples would choose the replay's held stagnant value over a cooling pipe
-        ran = recorded_flowing(rec, sensors[0])
-        if ran is not None:
-            use &= ~ran[:n]
         pf = AS_SIMULATED_FIT
         if use.sum() >= 10 and any(v is not None for v in meas.values()):
             pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None])
