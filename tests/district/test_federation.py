@@ -155,7 +155,9 @@ def test_a_killed_launcher_leaves_no_federate_behind_and_every_recording_reads(t
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     f = out / "house2" / "signals.csv"
     deadline = time.monotonic() + 300     # generous: a cold plant cache on a busy 2-core machine
-    while time.monotonic() < deadline and p.poll() is None and not (f.exists() and f.read_text().count("\n") > 50):
+    # house2 ahead by 10 rows: the other members, a step or two behind it when the kill lands,
+    # still hold more than the 50 rows asserted below (waiting for 50 alone left grid at 50)
+    while time.monotonic() < deadline and p.poll() is None and not (f.exists() and f.read_text().count("\n") > 60):
         time.sleep(0.2)
     assert p.poll() is None and f.exists(), "the district never reached 50 rows of house2"
     os.kill(p.pid, signal.SIGKILL)
