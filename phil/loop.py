@@ -41,6 +41,7 @@ class BenchChannel:
     guard: MeasurementGuard
     wiring: Any
     sent: dict[str, float] = field(default_factory=dict)
+    origin: dict[str, float] | None = None     # cumulative set-points at the first exchange
 
 
 @dataclass
@@ -56,6 +57,8 @@ class PhilOptions:
     retries: int = 1
     stop_file: str | Path | None = None
     warmup_s: float = 600.0           # simulated s before the run proper: benches and house settle
+    start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
+                                      # the house gets there unpaced on ideal benches
 
 
 def house_file(house: str) -> str:
@@ -85,10 +88,11 @@ class PhilLoop:
         self.columns = self._columns()
         self.recorder = Recorder(options.record, self.columns, {
             "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
-            "typeday": options.typeday, "benches": {n: f"{h}:{p}" for n, (h, p) in benches.items()},
+            "typeday": options.typeday, "start_h": options.start_h, "benches": {n: f"{h}:{p}" for n, (h, p) in benches.items()},
         }, interval=0.0) if options.record else None
         self.stop_reason = ""
         self.warmed = 0.0
+        self.t0 = 0.0
         self._stop = threading.Event()
         self._done = threading.Event()
         self.clock: PacedClock | None = None
@@ -114,9 +118,11 @@ class PhilLoop:
             row = self._exchange_all(dt, counted=not warming)
             if warming:
                 # the benches settle on the set-points while the house settles on an ideal
-                # bench (measured = requested); nothing of it is counted
-                self.house.set("mixer.T_sup", self.house.get("mixer.T_sup_set"))
-                self.house.set("mixer.m_flow", self.house.get("mixer.m_flow_set"))
+                # bench (measured = requested) where its wiring says what that is; nothing of
+                # it is counted
+                for ch in self.channels.values():
+                    if ch.wiring.ideal:
+                        ch.wiring.ideal(self.house)
                 self.warmed += dt
             self.house.step(dt)
             if not warming:
@@ -132,6 +138,9 @@ class PhilLoop:
         row: dict[str, float] = {}
         for name, ch in self.channels.items():
             wanted = ch.wiring.setpoints(self.house)
+            if ch.origin is None:
+                ch.origin = {k: wanted[k] for k in ch.wiring.cumulative}
+            wanted = {k: v - ch.origin.get(k, 0.0) for k, v in wanted.items()}
             ch.sent = ch.limiter.limit(wanted, dt)
             measured, failure = None, ""
             try:
@@ -182,7 +191,7 @@ class PhilLoop:
             reason = ch.guard.must_stop(wall)
             if reason:
                 return reason
-        if self.house.t >= self.o.warmup_s + self.o.hours * 3600.0 - 1e-9:
+        if self.house.t >= self.t0 + self.o.warmup_s + self.o.hours * 3600.0 - 1e-9:
             return "end of run"
         return ""
 
@@ -206,8 +215,20 @@ class PhilLoop:
         self._event({"kind": "stop", "reason": reason})
         self._done.set()
 
+    def _prerun(self) -> None:
+        """Advance the house unpaced to `start_h` with what an ideal bench would measure (benches
+        whose wiring has no ideal keep the live inputs' defaults): nothing is exchanged."""
+        end = self.o.start_h * 3600.0
+        while self.house.t < end - 1e-9:
+            for ch in self.channels.values():
+                if ch.wiring.ideal:
+                    ch.wiring.ideal(self.house)
+            self.house.step(min(self.o.dt, end - self.house.t))
+        self.t0 = self.house.t
+
     def run(self) -> dict[str, Any]:
         """Run paced until the end or a stop; returns the report (also stored as report.json)."""
+        self._prerun()
         self.clock = PacedClock(self.o.speed, self.o.dt)
         self.clock.bind(self.step)
         self.clock.start()

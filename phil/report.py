@@ -67,9 +67,9 @@ class Tally:
 
     def after_step(self, house: Any, dt: float) -> None:
         self.n_steps += 1
-        for bench in self.channels:
+        for bench, ch in self.channels.items():
             if not math.isnan(self.meter[bench][0]):
-                self.model_J_pending[bench] += house.get("mixer.Q_flow") * dt
+                self.model_J_pending[bench] += house.get(ch.wiring.model_heat) * dt
         self.room.append((house.t, house.get("zone.T_room"), house.get("zone.T_set")))
 
     def _room(self) -> dict[str, Any]:
@@ -88,6 +88,8 @@ class Tally:
         L = house.ledger()
         out: dict[str, Any] = {"stop_reason": stop_reason, "t_end_s": house.t, "steps": self.n_steps,
                                "room": self._room(), "benches": {}}
+        if out["room"]:
+            out["room"]["heat_to_room_kWh"] = L["heat_building"] / 3.6e6
         for bench, ch in self.channels.items():
             ex = np.array(self.exchange_s[bench]) * 1e3
             first, last = self.meter[bench]
@@ -100,8 +102,6 @@ class Tally:
                 "heat_bench_kWh": bench_kWh, "heat_model_kWh": model_kWh,
                 "heat_error_pct": (100.0 * (bench_kWh - model_kWh) / model_kWh
                                    if model_kWh > 0 and not math.isnan(bench_kWh) else None),
-                "heat_to_room_kWh": L["heat_building"] / 3.6e6,
-                "radiator_water_stored_change_kWh": L["delta_stored"] / 3.6e6,
                 "rejected": self.rejected[bench], "failed_exchanges": self.failures[bench],
                 "setpoints_limited": dict(ch.limiter.clamped),
                 "safe_sent": self.safe_sent.get(bench),
@@ -121,15 +121,15 @@ def format_report(report: dict[str, Any]) -> str:
     room = report.get("room") or {}
     if room:
         lines.append(f"  room: min {room['T_room_min_degC']:.2f} degC, {room['degree_hours_below_set_Kh']:.2f} "
-                     f"K h below set, {room['hours_more_than_0_5K_below_set']:.2f} h more than 0.5 K below")
+                     f"K h below set, {room['hours_more_than_0_5K_below_set']:.2f} h more than 0.5 K below; "
+                     f"heat to the room {room['heat_to_room_kWh']:.3f} kWh")
     for bench, b in report["benches"].items():
         lines.append(f"  bench {bench}:")
         for s, rms in b["follow_rms"].items():
             lines.append(f"    {s:28s} RMS follow error {rms if rms is None else f'{rms:.3f}'} {b['units'][s]}")
         err = b["heat_error_pct"]
         lines.append(f"    heat: bench {b['heat_bench_kWh']:.4f} kWh, model {b['heat_model_kWh']:.4f} kWh"
-                     + (f" ({err:+.4f} %)" if err is not None else "")
-                     + f"; to the room {b['heat_to_room_kWh']:.4f} kWh")
+                     + (f" ({err:+.4f} %)" if err is not None else ""))
         lines.append(f"    rejected: {b['rejected'] or 'none'}; failed exchanges {b['failed_exchanges']}; "
                      f"exchange median {b['exchange_ms']['median']} ms, p99 {b['exchange_ms']['p99']} ms")
         if b["safe_sent"]:

@@ -3,8 +3,15 @@
 One entry per bench kind (the map's id): `setpoints(house)` gives the §13.2 set-points in the
 map's device units from the PHIL house (plant/houses/house1_phil.toml), `feed(house, values)`
 sets the house's live measured boundary from judged measurements, `pairs` names each set-point
-with the measurement that shows whether the bench followed it, and `heat` the measurement that
-is the bench's heat meter [kWh].
+with the measurement that shows whether the bench followed it, `heat` the measurement that is
+the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it is compared with,
+`ideal(house)` (optional) what a perfect bench would measure, fed during the warm-up.
+
+  space_heating  supply and flow the thermostat requests, the radiator return -> measured supply
+                 and flow feed the radiators (mixer.T_sup, mixer.m_flow)
+  tap_water      cumulative demand energy dhw.E_set -> measured cold water feeds the demand
+  solar          collector outlet, heat and temperature -> measured return and flow feed the
+                 collector (solar.T_ret, solar.m_flow)
 """
 from __future__ import annotations
 
@@ -22,9 +29,14 @@ class Wiring:
     heat: str
     #: simulated signals recorded beside the exchange
     signals: tuple[str, ...]
+    #: the simulated heat flow [W] whose integral the bench's meter is compared with
+    model_heat: str = ""
     #: the measured flow [l/min]: temperature pairs count towards the follow error only while
     #: it is above FLOWING (a temperature of standing water says nothing about following)
     flow: str = ""
+    ideal: Callable[[Any], None] | None = None
+    #: cumulative set-points (an energy to draw): sent as the increase since the first exchange
+    cumulative: tuple[str, ...] = ()
 
 
 FLOWING = 0.5
@@ -41,13 +53,52 @@ def _space_heating_feed(house: Any, values: dict[str, float]) -> None:
     house.set("mixer.m_flow", values["SFW_HCRLbM_l_per_min"] / L_PER_MIN)
 
 
+def _space_heating_ideal(house: Any) -> None:
+    house.set("mixer.T_sup", house.get("mixer.T_sup_set"))
+    house.set("mixer.m_flow", house.get("mixer.m_flow_set"))
+
+
+J_PER_KWH = 3.6e6
+
+
+def _tap_water_setpoints(house: Any) -> dict[str, float]:
+    return {"E_DHW_Set_kWh": house.get("dhw.E_set") / J_PER_KWH}
+
+
+def _tap_water_feed(house: Any, values: dict[str, float]) -> None:
+    house.set("dhw.T_cold", values["STM_CCVL_degC"])
+
+
+def _solar_setpoints(house: Any) -> dict[str, float]:
+    return {"STM_STVL_Set_degC": house.get("solar.T_sup"),
+            "PEH_ST_Set_kW": house.get("solar.Q_flow") / 1e3,
+            "T_collector_degC": house.get("solar.T_collector")}
+
+
+def _solar_feed(house: Any, values: dict[str, float]) -> None:
+    house.set("solar.T_ret", values["STM_STRL_degC"])
+    house.set("solar.m_flow", values["SFW_STVL_l_per_min"] / L_PER_MIN)
+
+
 WIRINGS = {
     "space_heating": Wiring(
         setpoints=_space_heating_setpoints, feed=_space_heating_feed,
         pairs=(("STM_HCVLaM_Set_degC", "STM_HCVLaM_degC"),
                ("SFW_HCRLbM_Set_l_per_min", "SFW_HCRLbM_l_per_min"),
                ("STM_HCRL_Set_degC", "STM_HCRL_degC")),
-        heat="E_HC_kWh", flow="SFW_HCRLbM_l_per_min",
+        heat="E_HC_kWh", model_heat="mixer.Q_flow", flow="SFW_HCRLbM_l_per_min",
+        ideal=_space_heating_ideal,
         signals=("zone.T_room", "zone.T_set", "radiator.Q_flow", "mixer.Q_flow", "mixer.T_ret",
                  "mixer.T_sup_set", "mixer.m_flow_set", "weather.T_air")),
+    "tap_water": Wiring(
+        setpoints=_tap_water_setpoints, feed=_tap_water_feed,
+        pairs=(("E_DHW_Set_kWh", "E_DHW_kWh"),),
+        heat="E_DHW_kWh", model_heat="dhw.Q_flow", cumulative=("E_DHW_Set_kWh",),
+        signals=("dhw.m_flow_demand", "dhw.Q_flow", "dhw.E_set", "dhw.T_cold")),
+    "solar": Wiring(
+        setpoints=_solar_setpoints, feed=_solar_feed,
+        pairs=(("STM_STVL_Set_degC", "STM_STVL_degC"), ("PEH_ST_Set_kW", "PEH_ST_kW")),
+        heat="E_ST_kWh", model_heat="solar.Q_flow", flow="SFW_STVL_l_per_min",
+        signals=("solar.T_collector", "solar.T_sup", "solar.Q_flow", "solar.T_ret", "solar.m_flow",
+                 "solar.G_plane", "weather.T_air")),
 }

@@ -10,6 +10,7 @@ from .fmu import storage_kind as storage_fmu
 from .components import pv, sensor, solar_collector
 from .components import floor_heating, ground_collector
 from .components import electric_heater, substation
+from .components import phil_boundary
 
 KINDS = {k.name: k for k in (
     boundary.Kind(), chp.Kind(), boiler.Kind(), heat_pump.AirKind(), storage_kind.Kind(), zone.Kind(), radiator.Kind(),
@@ -21,4 +22,5 @@ KINDS = {k.name: k for k in (
     pv.Kind(), solar_collector.Kind(), sensor.Kind(),
     heat_pump.BrineKind(), ground_collector.Kind(), floor_heating.Kind(),
     electric_heater.Kind(), substation.Kind(),
+    phil_boundary.DemandKind(), phil_boundary.SolarKind(),
 )}

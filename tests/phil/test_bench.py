@@ -55,8 +55,19 @@ def test_tap_water_and_solar_follow_within_their_limits():
     solar = make_model("solar")
     solar.set("T_out_set", 80.0), solar.set("Q_set", 9000.0)
     solar.step(300.0)
+    assert solar.x["m_flow"] == 0.0 and solar.x["P"] == 0.0   # collector cold: the lab's pump stands
+    solar.set("T_collector", 85.0)
+    solar.step(300.0)
     assert abs(solar.x["P"] - solar.p["P_max"]) < 1.0          # the heater limit
     assert solar.x["T_out"] < 80.0
+    solar.set("T_collector", solar.p["T_in"] + 2.5)             # inside the hysteresis: still on
+    solar.step(60.0)
+    assert solar.x["on"] == 1.0
+    solar.set("T_collector", solar.p["T_in"] + 1.0)
+    solar.step(60.0)
+    assert solar.x["on"] == 0.0 and solar.x["m_flow"] < 0.01 * solar.p["m_flow_max"]
+    L = solar.balance()     # heater energy = heat to the lab + the heater water's change
+    assert L["E_heater"] > 1e6 and abs(L["residual"]) < 1e-6 * L["E_heater"]
 
 
 def test_bench_served_over_modbus_tcp_and_nan_is_judged():

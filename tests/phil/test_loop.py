@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parents[2]
 SPEED = 150.0
 
 
-def _bench_process(*extra: str, speed: float = SPEED) -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", "space_heating",
+def _bench_process(*extra: str, speed: float = SPEED, name: str = "space_heating") -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", name,
                              "--modbus-tcp", "127.0.0.1:0", "--speed", str(speed), *extra],
                             cwd=ROOT, stdout=subprocess.PIPE, text=True)
     line = proc.stdout.readline()
@@ -35,38 +35,52 @@ def _bench_process(*extra: str, speed: float = SPEED) -> tuple[subprocess.Popen,
     return proc, int(port.group(1))
 
 
+def _stop(*procs: subprocess.Popen) -> list[str]:
+    for proc in procs:
+        proc.send_signal(signal.SIGTERM)
+    return [proc.communicate(timeout=30)[0] for proc in procs]
+
+
 def _rows(run: Path) -> tuple[list[str], list[list[str]]]:
     rows = list(csv.reader((run / "signals.csv").open()))
     return rows[0], rows[1:]
 
 
-def test_sf1_space_heating_heat_agrees_with_the_bench(tmp_path):
-    """Bench heat = the increase of the bench's heat meter (E_HC_kWh) between the first and last
-    counted exchange; model heat = the heat the simulated radiator circuit took from the water the
-    bench reported, sum of m_meas cp (T_sup_meas - T_return_model) dt over the same steps. They
-    must agree because the bench returns the water at the return the model computed: what is left
-    is the flow-weighted return follow error, sensor noise and exchange timing (phil/report.py)."""
-    proc, port = _bench_process()
+def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
+    """SF1 with its three benches, each a process of its own, on type day 4 (October) from 8:00:
+    heating, the morning's hot-water draws and the collector's first sun. Bench heat = the
+    increase of each bench's meter between the first and last counted exchange; model heat = the
+    simulated heat over the same steps (phil/report.py): the radiator circuit's m_meas cp
+    (T_sup_meas - T_return_model), the demand's energy at the measured cold water, the
+    collector's heat with the measured return and flow."""
+    benches = {name: _bench_process(name=name) for name in ("space_heating", "tap_water", "solar")}
     try:
-        loop = PhilLoop("house1", {"space_heating": ("127.0.0.1", port)},
-                        PhilOptions(speed=SPEED, dt=2.0, hours=1.5, typeday=1, record=tmp_path / "run"))
+        loop = PhilLoop("house1", {n: ("127.0.0.1", port) for n, (_, port) in benches.items()},
+                        PhilOptions(speed=SPEED, dt=2.0, hours=1.0, typeday=4, start_h=32.0, warmup_s=300.0,
+                                    record=tmp_path / "run"))
         report = loop.run()
     finally:
-        proc.send_signal(signal.SIGTERM)
-        out, _ = proc.communicate(timeout=30)
-    b = report["benches"]["space_heating"]
-    print(json.dumps(b, indent=1, default=str))
+        outs = _stop(*(proc for proc, _ in benches.values()))
+    print(json.dumps(report, indent=1, default=str))
     assert report["stop_reason"] == "end of run"
-    assert b["heat_model_kWh"] > 2.0
-    # measured on a shared 2-core machine: +0.05 ... +0.15 %; the reference's 0.1 % is not held
-    # every run at 300x real time (timing jitter of the two paced clocks), hence 0.25 %
-    assert abs(b["heat_error_pct"]) < 0.25
-    assert b["follow_rms"]["STM_HCRL_Set_degC"] < 0.5
-    assert not b["rejected"] and b["safe_sent"]["SFW_HCRLbM_Set_l_per_min"] == 0.0
+    sh, tap, solar = (report["benches"][n] for n in ("space_heating", "tap_water", "solar"))
+    assert sh["heat_model_kWh"] > 1.5 and tap["heat_model_kWh"] > 0.1 and solar["heat_model_kWh"] > 0.2
+    # measured on a shared 2-core machine (1.5 h windows): space heating -0.11 ... +0.17 %,
+    # hot water 0.00 %, solar -0.15 %; at 150x real time the two paced clocks' jitter and the
+    # flow meters' noise at low flows leave more than the reference's 0.1 % in some runs
+    assert abs(sh["heat_error_pct"]) < 0.3
+    assert abs(tap["heat_error_pct"]) < 1.0 and abs(solar["heat_error_pct"]) < 2.0
+    assert sh["follow_rms"]["STM_HCRL_Set_degC"] < 0.5
+    assert solar["follow_rms"]["STM_STVL_Set_degC"] < 1.0
+    assert not any(b["rejected"] for b in report["benches"].values())
+    assert sh["safe_sent"]["SFW_HCRLbM_Set_l_per_min"] == 0.0 and tap["safe_sent"]["E_DHW_Set_kWh"] == 0.0
     head, rows = _rows(tmp_path / "run")
-    assert "space_heating.STM_HCRL_Set_degC" in head and "space_heating.exchange_ms" in head
-    assert len(rows) == report["steps"] + 300      # 300 warm-up steps, every step recorded
-    assert json.loads(out.strip().splitlines()[-1])["ledger"]["residual"] < 1e-3
+    for column in ("space_heating.STM_HCRL_Set_degC", "tap_water.E_DHW_Set_kWh", "solar.PEH_ST_Set_kW",
+                   "solar.SFW_STVL_l_per_min.used", "dhw.T_cold", "solar.exchange_ms"):
+        assert column in head
+    assert len(rows) == report["steps"] + 150      # 150 warm-up steps, every step recorded
+    for out in outs:
+        assert abs(json.loads(out.strip().splitlines()[-1])["ledger"].get("residual", 0.0)) < 1e-3
 
 
 def test_bench_below_the_requested_flow_cools_the_room_and_reports_the_deficit(tmp_path):
