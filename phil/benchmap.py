@@ -10,7 +10,9 @@ CSV/MD export, gateway/maps/) whose points carry three more fields, and a `[phil
 | `safe` | set-points: the value the twin sends on a fault and at a stop, in `unit` |
 
 `[phil]`: `stale_s` (a measurement with no fresh value this long is rejected and held),
-`stop_s` (rejected this long: safe set-points and stop). Point names are the reference's §13.2
+`stop_s` (rejected this long: safe set-points and stop), `serve_offset` (when the twin serves
+the bench PLC, phil/served.py: the holding address where the PLC writes a measurement is
+serve_offset + its input address; default 100). Point names are the reference's §13.2
 signal names (STM_HCVLaM_Set_degC ...); `command`/`signal` bind them to the bench emulator's own
 model (phil/emulator/), which is what a bench PLC's program would be.
 
@@ -53,6 +55,7 @@ class BenchMap:
     interfaces: tuple[Interface, ...]
     stale_s: float = 5.0
     stop_s: float = 30.0
+    serve_offset: int = 100
 
     @property
     def id(self) -> str:
@@ -112,9 +115,25 @@ def load_bench_map(name: str | Path) -> BenchMap:
     if not 0 < stale_s < stop_s:
         problems.append(f"{path} [phil] stale_s = {stale_s}, stop_s = {stop_s}: need 0 < stale_s < stop_s; "
                         "a measurement is first held, then the run stops")
+    offset = section.get("serve_offset", 100)
+    if dmap is not None:
+        problems += _serve_offset_problems(path, dmap, interfaces, offset)
     if problems or dmap is None:
         raise DeviceMapError("\n".join(dict.fromkeys(problems)))
-    return BenchMap(dmap=dmap, interfaces=interfaces, stale_s=stale_s, stop_s=stop_s)
+    return BenchMap(dmap=dmap, interfaces=interfaces, stale_s=stale_s, stop_s=stop_s, serve_offset=offset)
+
+
+def _serve_offset_problems(path: Path, dmap: DeviceMap, interfaces: tuple[Interface, ...], offset: object) -> list[str]:
+    """serve_offset must put every measurement's served holding register above the set-points'."""
+    if isinstance(offset, bool) or not isinstance(offset, int) or not 0 < offset <= 60000:
+        return [f"{path} [phil] serve_offset = {offset!r}: must be an integer 1…60000 (holding address "
+                "of the served measurements = serve_offset + input address)"]
+    names = {i.name for i in interfaces if i.direction == "to_bench"}
+    top = max((p.address + p.words for p in dmap.points if p.name in names and p.table == "holding"), default=0)
+    if offset < top:
+        return [f"{path} [phil] serve_offset = {offset}: below the set-points' holding registers (up to "
+                f"{top - 1}); the served measurements would overlap them; use serve_offset >= {top}"]
+    return []
 
 
 def _interface(path: Path, raw: dict, extra: dict, problems: list[str]) -> Interface:

@@ -21,6 +21,7 @@ from typing import Any
 from gateway.clock import PacedClock
 from phil.benchmap import BenchMap, load_bench_map
 from phil.master import BenchLink, ExchangeError
+from phil.served import ServedLink, SharedServer
 from phil.report import Tally
 from phil.safety import MeasurementGuard, SetpointLimiter
 from phil.wiring import WIRINGS
@@ -57,6 +58,7 @@ class PhilOptions:
     retries: int = 1
     stop_file: str | Path | None = None
     warmup_s: float = 600.0           # simulated s before the run proper: benches and house settle
+    served_age_s: float = 2.0         # served benches: a measurement not written this long (wall) is silent
     start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
                                       # the house gets there unpaced on ideal benches
 
@@ -70,25 +72,64 @@ def house_file(house: str) -> str:
     return HOUSE_FILES[house]
 
 
+@dataclass(frozen=True)
+class BenchAddress:
+    """Where a bench's PLC is: polled there (the twin as Modbus TCP master), or served there
+    (`serve`: the twin as the server the PLC reads set-points from and writes measurements to)."""
+
+    host: str
+    port: int
+    serve: bool = False
+
+    def __str__(self) -> str:
+        return f"{'serve:' if self.serve else ''}{self.host}:{self.port}"
+
+
+def parse_bench(spec: str) -> tuple[str, BenchAddress]:
+    """'NAME=HOST:PORT' (poll the bench PLC) or 'NAME=serve:HOST:PORT' (serve it)."""
+    name, _, address = spec.partition("=")
+    serve = address.startswith("serve:")
+    host, _, port = address.removeprefix("serve:").rpartition(":")
+    if not name or not port.isdigit():
+        raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT (the twin polls the bench PLC) or "
+                          "NAME=serve:HOST:PORT (the PLC polls the twin), e.g. space_heating=127.0.0.1:5031")
+    return name, BenchAddress(host or "127.0.0.1", int(port), serve)
+
+
 class PhilLoop:
-    def __init__(self, house: str, benches: dict[str, tuple[str, int]], options: PhilOptions) -> None:
+    def __init__(self, house: str, benches: dict[str, tuple[str, int] | BenchAddress],
+                 options: PhilOptions) -> None:
         self.o = options
         overrides = {"profiles.typeday": options.typeday} if options.typeday else None
         self.house = load_house(house_file(house), controller="rule_based", overrides=overrides)
         self.channels: dict[str, BenchChannel] = {}
-        for name, (host, port) in benches.items():
+        self.addresses = {n: a if isinstance(a, BenchAddress) else BenchAddress(*a) for n, a in benches.items()}
+        servers: list[SharedServer] = []
+        for name, where in self.addresses.items():
             bmap = load_bench_map(name)
             if bmap.id not in WIRINGS:
                 raise ConfigError(f"--bench {name}: not wired into the PHIL loop yet; wired: {', '.join(WIRINGS)}")
+            if where.serve:
+                server = SharedServer.at(where.host, where.port)
+                servers += [server] if server not in servers else []
+                link: BenchLink | ServedLink = ServedLink(bmap, server, options.served_age_s)
+                link.device.subscribe(self._bus_event)
+            else:
+                link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
             self.channels[name] = BenchChannel(
-                bmap, BenchLink(bmap, host, port, options.timeout_s, options.retries),
-                SetpointLimiter(bmap), MeasurementGuard(bmap, options.stale_s, options.stop_s,
-                                                        time.monotonic()), WIRINGS[bmap.id])
+                bmap, link, SetpointLimiter(bmap),
+                MeasurementGuard(bmap, options.stale_s, options.stop_s, time.monotonic()), WIRINGS[bmap.id])
+        self.recorder = None
+        for server in servers:
+            server.start()
+        self.served = {n: f"{ch.link.address[0]}:{ch.link.address[1]}" for n, ch in self.channels.items()
+                       if isinstance(ch.link, ServedLink)}
         self.tally = Tally(self.channels)
         self.columns = self._columns()
         self.recorder = Recorder(options.record, self.columns, {
             "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
-            "typeday": options.typeday, "start_h": options.start_h, "benches": {n: f"{h}:{p}" for n, (h, p) in benches.items()},
+            "typeday": options.typeday, "start_h": options.start_h,
+            "benches": {n: str(a) for n, a in self.addresses.items()}, "served": self.served,
         }, interval=0.0) if options.record else None
         self.stop_reason = ""
         self.warmed = 0.0
@@ -148,7 +189,7 @@ class PhilLoop:
             except ExchangeError as exc:
                 failure = f"{exc.kind}: {exc.detail}"
             wall = time.monotonic()
-            judged = ch.guard.judge(measured, wall, failure)
+            judged = ch.guard.judge(measured, wall, failure, getattr(ch.link, "reasons", None))
             for iname, j in judged.items():
                 if not j.ok:
                     self._event({"kind": "rejected", "device": name, "point": iname,
@@ -176,6 +217,12 @@ class PhilLoop:
         row["lateness_ms"] = float(late[-1]) * 1e3 if len(late) else 0.0
         self.recorder.signals(t, [row[c] for c in self.columns])
         self.recorder.flush()
+
+    def _bus_event(self, ev: dict[str, Any]) -> None:
+        """A served bench's bus events (its Device's, on the server thread): refused writes of
+        the bench PLC are recorded, accepted ones are the measurements in signals.csv."""
+        if self.recorder and ev.get("kind") == "write" and not ev.get("accepted", True):
+            self.recorder.event({**ev, "t": self.house.t, "kind": "refused"})
 
     def _event(self, ev: dict[str, Any]) -> None:
         if self.recorder:
@@ -236,6 +283,10 @@ class PhilLoop:
             if self._stop.is_set() and not self.clock._thread.is_alive():
                 self._finish("operator stop")
         self.clock.stop()
+        if self.served:
+            # the bench PLCs poll on their own cycle: serve the safe set-points long enough for
+            # each to read them once before the server closes
+            time.sleep(min(self.o.served_age_s, 2.0))
         for ch in self.channels.values():
             ch.link.close()
         report = self.tally.report(self.house, self.stop_reason, self.clock.lateness())

@@ -1,5 +1,6 @@
 """BenchLink: the twin as Modbus TCP master of one bench PLC (the only module that imports the
-pymodbus client).
+pymodbus client); PlcLink: the same client on the other side, a bench PLC polling the twin that
+serves it (phil/served.py, the bench emulator's `--plc` mode).
 
 Per exchange it writes the set-points (one FC16 per contiguous holding block) and reads the
 measurements (one FC4/FC3 per contiguous block), converting with the map's codec
@@ -129,3 +130,15 @@ class BenchLink:
             return self.read()
         finally:
             self.last_exchange_s = time.perf_counter() - t0
+
+
+class PlcLink(BenchLink):
+    """A bench PLC's client of the twin that serves it: `read()` gives the set-points, `write()`
+    sends the measurements (device units), on the served map's registers (phil/served.py)."""
+
+    def __init__(self, served: BenchMap, host: str, port: int, timeout: float = 0.5,
+                 retries: int = 1) -> None:
+        super().__init__(served, host, port, timeout, retries)
+        dmap = served.dmap
+        self.read_blocks = blocks([dmap.point(i.name) for i in served.setpoints()])
+        self.write_blocks = blocks([dmap.point(i.name) for i in served.measurements()])

@@ -67,14 +67,17 @@ class MeasurementGuard:
         self.stop_s = bench.stop_s if stop_s is None else stop_s
         self.state = {i.name: GuardState(since_good=start_wall) for i in bench.measurements()}
 
-    def judge(self, measured: dict[str, float] | None, wall: float,
-              failure: str = "") -> dict[str, Judged]:
-        """Measured values (None: the exchange failed, `failure` says how) -> judged values."""
+    def judge(self, measured: dict[str, float] | None, wall: float, failure: str = "",
+              reasons: dict[str, str] | None = None) -> dict[str, Judged]:
+        """Measured values (None: the exchange failed, `failure` says how; `reasons`: why single
+        measurements came without a value, as from a silent bench PLC) -> judged values."""
         out = {}
         for i in self.bench.measurements():
             st = self.state[i.name]
             value = math.nan if measured is None else measured.get(i.name, math.nan)
             reason = self._reject(i.name, value) if measured is not None else (failure or "no answer")
+            if measured is not None and reasons and i.name in reasons:
+                reason = reasons[i.name]
             if not reason:
                 st.good, st.since_good = value, wall
                 out[i.name] = Judged(value, True)

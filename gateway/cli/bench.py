@@ -1,4 +1,6 @@
-"""`twin bench NAME --modbus-tcp HOST:PORT`: run one PHIL bench emulator (phil/emulator/)."""
+"""`twin bench NAME --modbus-tcp HOST:PORT`: run one PHIL bench emulator (phil/emulator/) as a
+Modbus TCP server the twin polls; `--plc HOST:PORT`: as the bench PLC polling the twin that
+serves it (`twin phil ... --bench NAME=serve:HOST:PORT`)."""
 from __future__ import annotations
 
 import argparse
@@ -11,6 +13,7 @@ import threading
 EXAMPLES = """examples:
   twin bench space_heating --modbus-tcp 127.0.0.1:5031 --speed 1
   twin bench space_heating --modbus-tcp 127.0.0.1:0 --speed 300 --param m_flow_max=0.05
+  twin bench space_heating --plc 127.0.0.1:5040 --period 0.05    # the PLC polls the twin
   twin bench list
 """
 
@@ -21,6 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("name", help="bench (phil/benches/NAME.toml), or 'list'")
     p.add_argument("--modbus-tcp", default="127.0.0.1:5031", metavar="HOST:PORT",
                    help="address to serve (port 0 = a free port, printed)")
+    p.add_argument("--plc", metavar="HOST:PORT", help="instead of serving: act as the bench PLC, "
+                   "reading set-points from and writing measurements to the twin serving at HOST:PORT")
+    p.add_argument("--period", type=float, default=0.05, help="with --plc: poll period [s wall]")
     p.add_argument("--speed", type=float, default=1.0, help="real time x SPEED")
     p.add_argument("--seed", type=int, default=0, help="sensor-noise seed")
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
@@ -35,11 +41,20 @@ def run(args: argparse.Namespace) -> int:
     if args.name == "list":
         print("\n".join(sorted(p.stem for p in BENCHES_DIR.glob("*.toml"))))
         return 0
-    host, _, port = args.modbus_tcp.rpartition(":")
     params = {k: float(v) for k, v in (kv.split("=", 1) for kv in args.param)}
-    server = BenchServer(args.name, host or "127.0.0.1", int(port), args.speed, args.seed, params).start()
-    print(f"bench {args.name} on Modbus TCP {host}:{server.port} (unit {server.map.dmap.unit_id}), "
-          f"speed {args.speed:g}", flush=True)
+    if args.plc:
+        from phil.emulator.plc import BenchPlc
+
+        host, _, port = args.plc.rpartition(":")
+        server = BenchPlc(args.name, host or "127.0.0.1", int(port), args.speed, args.period, args.seed,
+                          params).start()
+        print(f"bench {args.name} as PLC of the twin at {host}:{port} (unit {server.map.dmap.unit_id}), "
+              f"every {args.period:g} s, speed {args.speed:g}", flush=True)
+    else:
+        host, _, port = args.modbus_tcp.rpartition(":")
+        server = BenchServer(args.name, host or "127.0.0.1", int(port), args.speed, args.seed, params).start()
+        print(f"bench {args.name} on Modbus TCP {host}:{server.port} (unit {server.map.dmap.unit_id}), "
+              f"speed {args.speed:g}", flush=True)
     done = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: done.set())

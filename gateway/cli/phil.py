@@ -10,6 +10,9 @@ EXAMPLES = """examples:
   twin bench space_heating --modbus-tcp 127.0.0.1:5031 &
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 60 --typeday 1 --hours 6 --record runs/phil2
+  twin phil house1 --bench space_heating=serve:127.0.0.1:5040 --speed 60 --hours 1   # the PLC polls
+  twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 \
+      --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md)
 """
@@ -21,12 +24,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), 'lint' or 'table'")
     p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path)")
     p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
-    p.add_argument("--bench", action="append", default=[], metavar="NAME=HOST:PORT",
-                   help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address")
+    p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT",
+                   help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address the twin "
+                   "polls, or with serve: the address where the twin serves the PLC (port 0: a free one)")
     p.add_argument("--speed", type=float, default=1.0, help="real time x SPEED")
     p.add_argument("--step", type=float, default=1.0, help="exchange step [s of simulated time]")
     p.add_argument("--hours", type=float, default=24.0, help="simulated hours after the warm-up")
     p.add_argument("--typeday", type=int, default=0, help="VDI 4655 type-day block 1-11 (profiles/typedays)")
+    p.add_argument("--start", type=float, default=0.0, help="hour of the profiles where the warm-up "
+                   "starts (e.g. 24 = the type day itself); reached unpaced on ideal benches")
+    p.add_argument("--served-age", type=float, default=2.0, help="served benches: s (wall) after which a "
+                   "measurement the PLC has not rewritten counts as silent")
     p.add_argument("--warmup", type=float, default=600.0, help="warm-up [s simulated], not counted")
     p.add_argument("--record", help="run directory: signals.csv, events.csv, meta.json, report.json")
     p.add_argument("--stale", type=float, help="s (wall) without a good value before a measurement "
@@ -41,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from phil.benchmap import lint_bench_maps
-    from phil.loop import PhilLoop, PhilOptions
+    from phil.loop import PhilLoop, PhilOptions, parse_bench
     from phil.report import format_report
     from plant.errors import ConfigError
 
@@ -56,19 +64,16 @@ def run(args: argparse.Namespace) -> int:
         dmap = load_bench_map(args.bench_map or "space_heating").dmap
         print(to_markdown(dmap) if args.format == "md" else to_csv(dmap), end="")
         return 0
-    benches = {}
-    for spec in args.bench:
-        name, _, address = spec.partition("=")
-        host, _, port = address.rpartition(":")
-        if not name or not port.isdigit():
-            raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT, e.g. space_heating=127.0.0.1:5031")
-        benches[name] = (host or "127.0.0.1", int(port))
+    benches = dict(parse_bench(spec) for spec in args.bench)
     if not benches:
         raise ConfigError("twin phil: no --bench given; e.g. --bench space_heating=127.0.0.1:5031")
     loop = PhilLoop(args.house, benches, PhilOptions(
         speed=args.speed, dt=args.step, hours=args.hours, typeday=args.typeday, record=args.record,
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
-        stop_file=args.stop_file, warmup_s=args.warmup))
+        stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age))
+    for name, address in loop.served.items():
+        print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
+              f"{loop.channels[name].map.dmap.unit_id})", flush=True)
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: loop.request_stop())
     report = loop.run()

@@ -1,0 +1,107 @@
+"""The second exchange direction: the twin serves the bench PLC (phil/served.py, the gateway's
+Modbus TCP server), which reads the set-points and writes its measurements. Played by mbpoll (a
+third-party master, /usr/bin/mbpoll) and by the bench emulator's PLC mode in its own process."""
+from __future__ import annotations
+
+import csv
+import json
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from phil.loop import BenchAddress, PhilLoop, PhilOptions
+
+ROOT = Path(__file__).resolve().parents[2]
+MBPOLL = shutil.which("mbpoll")
+
+
+def _wait_written(loop: PhilLoop, name: str, timeout: float = 30.0) -> None:
+    """Until the PLC has written every measurement once (its process takes a while to start)."""
+    board = loop.channels[name].link.board
+    deadline = time.monotonic() + timeout
+    while len(board.written) < len(loop.channels[name].map.measurements()):
+        assert time.monotonic() < deadline, f"the bench PLC wrote {sorted(board.written)} only"
+        time.sleep(0.05)
+
+
+def _rows(run: Path) -> list[dict[str, str]]:
+    return list(csv.DictReader((run / "signals.csv").open()))
+
+
+@pytest.mark.skipif(MBPOLL is None, reason="mbpoll not installed")
+def test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements(tmp_path):
+    # type day 4 from 7:00: the morning's hot-water draws make the set-point move
+    loop = PhilLoop("house1", {"tap_water": BenchAddress("127.0.0.1", 0, serve=True)},
+                    PhilOptions(speed=50.0, dt=2.0, hours=0.1, typeday=4, start_h=31.0, warmup_s=20.0,
+                                record=tmp_path / "run", served_age_s=5.0))
+    port = loop.served["tap_water"].rpartition(":")[2]
+
+    def mbpoll(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run([MBPOLL, "-m", "tcp", "-a", "2", "-0", "-t", "4:float", "-B", "-1", "-o", "2",
+                               "-p", port, *args], capture_output=True, text=True, timeout=30)
+
+    read: list[float] = []
+    done = threading.Event()
+
+    def plc():
+        # a perfect bench: it has drawn what it was told, cold water at 11.5 degC
+        while not done.is_set():
+            out = mbpoll("-r", "0", "-c", "1", "127.0.0.1")
+            value = re.search(r"\[0\]:\s+(\S+)", out.stdout)
+            if value:
+                read.append(float(value.group(1)))
+                mbpoll("-r", "100", "127.0.0.1", "11.5", str(read[-1]), "3.0")
+            time.sleep(0.02)
+
+    assert mbpoll("-r", "100", "127.0.0.1", "11.5", "0", "0").returncode == 0
+    refused = mbpoll("-r", "0", "127.0.0.1", "5.0")      # the set-point is not the PLC's to write
+    assert refused.returncode != 0 and "Illegal data address" in refused.stderr
+    threading.Thread(target=plc, daemon=True).start()
+    try:
+        report = loop.run()
+    finally:
+        done.set()
+    b = report["benches"]["tap_water"]
+    assert report["stop_reason"] == "end of run" and len(read) > 20
+    assert max(read) > 0.05                       # it read the growing set-point [kWh]
+    rows = _rows(tmp_path / "run")
+    sent = {round(float(r["tap_water.E_DHW_Set_kWh"]), 5) for r in rows}
+    assert sum(round(v, 5) in sent for v in read) > 0.9 * len(read)   # what it read is what was sent
+    assert all(float(r["tap_water.STM_CCVL_degC.used"]) == 11.5 for r in rows)
+    assert all(float(r["dhw.T_cold"]) == 11.5 for r in rows[1:])    # the demand took its cold water
+    assert not b["rejected"] and b["heat_model_kWh"] > 0.05
+    # it echoes what it read a cycle (two mbpoll processes, 30-50 ms, 1-2 steps at 50x) later
+    assert 0.5 * b["heat_model_kWh"] < b["heat_bench_kWh"] <= b["heat_model_kWh"] + 1e-6
+    events = list(csv.DictReader((tmp_path / "run" / "events.csv").open()))
+    assert any(e["kind"] == "refused" and e["point"] == "E_DHW_Set_kWh" for e in events)
+    assert events[-1]["kind"] == "stop"
+
+
+def test_space_heating_bench_as_plc_process_polling_the_twin(tmp_path):
+    loop = PhilLoop("house1", {"space_heating": BenchAddress("127.0.0.1", 0, serve=True)},
+                    PhilOptions(speed=100.0, dt=2.0, hours=0.5, typeday=1, start_h=31.0, warmup_s=300.0,
+                                record=tmp_path / "run"))
+    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", "space_heating",
+                             "--plc", loop.served["space_heating"], "--speed", "100", "--period", "0.005"],
+                            cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        _wait_written(loop, "space_heating")
+        report = loop.run()
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=30)
+    b = report["benches"]["space_heating"]
+    print(json.dumps(b, indent=1, default=str))
+    summary = json.loads(out.strip().splitlines()[-1])
+    assert summary["polls"] > 1000 and summary["inputs"]["m_flow_set"] == 0.0   # it read the safe values
+    assert report["stop_reason"] == "end of run" and b["heat_model_kWh"] > 1.5
+    assert abs(b["heat_error_pct"]) < 0.5
+    assert b["follow_rms"]["STM_HCRL_Set_degC"] < 0.5
+    assert b["exchange_ms"]["p99"] < 5.0           # no bus in the step: publish and take
