@@ -39,6 +39,7 @@ class Tally:
         self.model_J_pending = {b: 0.0 for b in channels}
         self.safe_sent: dict[str, dict[str, float]] = {}
         self.room: list[tuple[float, float, float]] = []           # t, T_room, T_set
+        self.demand = {b: [] for b, ch in channels.items() if ch.wiring.demand}   # t, dt, demand
 
     def exchange(self, bench: str, sent: dict, measured: dict | None, judged: dict,
                  exchange_s: float, dt: float) -> None:
@@ -71,6 +72,8 @@ class Tally:
             if not math.isnan(self.meter[bench][0]):
                 self.model_J_pending[bench] += house.get(ch.wiring.model_heat) * dt
         self.room.append((house.t, house.get("zone.T_room"), house.get("zone.T_set")))
+        for bench in self.demand:
+            self.demand[bench].append((house.t, dt, *self.channels[bench].wiring.demand(house)))
 
     def _room(self) -> dict[str, Any]:
         if not self.room:
@@ -108,10 +111,60 @@ class Tally:
                 "exchange_ms": {"median": float(np.median(ex)) if len(ex) else None,
                                 "p99": float(np.percentile(ex, 99)) if len(ex) else None},
             }
+            if bench in self.demand:
+                out["benches"][bench]["shortfalls"] = shortfalls(np.array(self.demand[bench]),
+                                                                 np.array(self.room))
         late = lateness * 1e3
         out["lateness_ms"] = {"median": float(np.median(late)) if len(late) else None,
                               "p99": float(np.percentile(late, 99)) if len(late) else None}
         return out
+
+
+#: a shortfall: the measured flow below SHORT_SHARE of the request less SHORT_MARGIN l/min (the
+#: bench's noise and its pump's lag stay inside), for at least SHORT_MIN_S, gaps < SHORT_GAP_S joined
+SHORT_SHARE, SHORT_MARGIN, SHORT_MIN_S, SHORT_GAP_S = 0.9, 0.3, 300.0, 120.0
+
+
+def shortfalls(demand: np.ndarray, room: np.ndarray) -> list[dict[str, Any]]:
+    """When the bench could not deliver the flow the building requested, how much heat it missed
+    (the heat delivered in the hour before, as a rate, less what it delivered), how cold the room
+    got, when it was back within 0.1 K of its set-point, and the heat delivered until then above
+    the hour before (the heat made up). demand rows: t, dt, flow set, flow measured, Q_req, Q_del
+    (Q_req, m_set cp (T_sup_set - T_ret), overstates a cold radiator's need: not used for the
+    deficit); room rows: t, T_room, T_set."""
+    if not len(demand):
+        return []
+    t, dt, m_set, m_meas, Q_req, Q_del = demand.T
+    short = m_meas < SHORT_SHARE * m_set - SHORT_MARGIN
+    spans: list[list[int]] = []
+    for i in np.flatnonzero(short):
+        if spans and t[i] - t[spans[-1][1]] <= SHORT_GAP_S:
+            spans[-1][1] = i
+        else:
+            spans.append([i, i])
+    out = []
+    for a, b in spans:
+        if t[b] - t[a] + dt[b] < SHORT_MIN_S:
+            continue
+        before = (t >= t[a] - 3600.0) & (t < t[a])
+        baseline = float(Q_del[before].mean()) if before.any() else 0.0
+        after = np.flatnonzero((room[:, 0] > t[b]) & (room[:, 1] >= room[:, 2] - 0.1))
+        back = float(room[after[0], 0]) if len(after) else None
+        span = slice(a, b + 1)
+        catch = (t > t[b]) & (t <= (back if back is not None else t[-1]))
+        deficit = np.clip(room[:, 2] - room[:, 1], 0.0, None)
+        within = (room[:, 0] >= t[a]) & (room[:, 0] <= (back if back is not None else t[-1]))
+        out.append({
+            "start_s": float(t[a] - dt[a]), "end_s": float(t[b]), "hours": float((t[b] - t[a] + dt[b]) / 3600.0),
+            "flow_requested_l_per_min": float(m_set[span].mean()), "flow_measured_l_per_min": float(m_meas[span].mean()),
+            "heat_missing_kWh": float(((baseline - Q_del[span]) * dt[span]).sum() / 3.6e6),
+            "T_room_min_degC": float(room[within, 1].min()) if within.any() else None,
+            "degree_hours_below_set_Kh": float((deficit[within] * np.diff(room[:, 0], prepend=room[0, 0])[within]).sum() / 3600.0),
+            "room_back_within_0_1K_s": back,
+            "heat_made_up_kWh": float(((Q_del[catch] - baseline) * dt[catch]).sum() / 3.6e6),
+            "heat_before_W": baseline,
+        })
+    return out
 
 
 def format_report(report: dict[str, Any]) -> str:
@@ -132,6 +185,13 @@ def format_report(report: dict[str, Any]) -> str:
                      + (f" ({err:+.4f} %)" if err is not None else ""))
         lines.append(f"    rejected: {b['rejected'] or 'none'}; failed exchanges {b['failed_exchanges']}; "
                      f"exchange median {b['exchange_ms']['median']} ms, p99 {b['exchange_ms']['p99']} ms")
+        for f in b.get("shortfalls", []):
+            back = f["room_back_within_0_1K_s"]
+            lines.append(f"    flow shortfall {f['start_s'] / 3600:.2f}-{f['end_s'] / 3600:.2f} h ({f['hours']:.2f} h): "
+                         f"{f['flow_measured_l_per_min']:.2f} of {f['flow_requested_l_per_min']:.2f} l/min, "
+                         f"{f['heat_missing_kWh']:.2f} kWh missing; room down to {f['T_room_min_degC']:.2f} degC, "
+                         + (f"back within 0.1 K at {back / 3600:.2f} h" if back is not None else "not back by the end")
+                         + f", {f['heat_made_up_kWh']:.2f} kWh made up above the hour before")
         if b["safe_sent"]:
             lines.append(f"    safe set-points sent: {b['safe_sent']}")
     lat = report["lateness_ms"]

@@ -37,6 +37,9 @@ class Wiring:
     ideal: Callable[[Any], None] | None = None
     #: cumulative set-points (an energy to draw): sent as the increase since the first exchange
     cumulative: tuple[str, ...] = ()
+    #: what the building asked and got, for the shortfall report: (flow requested, flow measured
+    #: [l/min], heat requested, heat delivered [W])
+    demand: Callable[[Any], tuple[float, float, float, float]] | None = None
 
 
 FLOWING = 0.5
@@ -51,6 +54,15 @@ def _space_heating_setpoints(house: Any) -> dict[str, float]:
 def _space_heating_feed(house: Any, values: dict[str, float]) -> None:
     house.set("mixer.T_sup", values["STM_HCVLaM_degC"])
     house.set("mixer.m_flow", values["SFW_HCRLbM_l_per_min"] / L_PER_MIN)
+
+
+CP = 4180.0
+
+
+def _space_heating_demand(house: Any) -> tuple[float, float, float, float]:
+    m_set, T_ret = house.get("mixer.m_flow_set"), house.get("mixer.T_ret")
+    return (m_set * L_PER_MIN, house.get("mixer.m_flow") * L_PER_MIN,
+            m_set * CP * max(house.get("mixer.T_sup_set") - T_ret, 0.0), house.get("mixer.Q_flow"))
 
 
 def _space_heating_ideal(house: Any) -> None:
@@ -87,7 +99,7 @@ WIRINGS = {
                ("SFW_HCRLbM_Set_l_per_min", "SFW_HCRLbM_l_per_min"),
                ("STM_HCRL_Set_degC", "STM_HCRL_degC")),
         heat="E_HC_kWh", model_heat="mixer.Q_flow", flow="SFW_HCRLbM_l_per_min",
-        ideal=_space_heating_ideal,
+        ideal=_space_heating_ideal, demand=_space_heating_demand,
         signals=("zone.T_room", "zone.T_set", "radiator.Q_flow", "mixer.Q_flow", "mixer.T_ret",
                  "mixer.T_sup_set", "mixer.m_flow_set", "weather.T_air")),
     "tap_water": Wiring(

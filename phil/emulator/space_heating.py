@@ -30,6 +30,7 @@ PHIL compares that with the heat the simulated building took.
 | V_supply, V_exchanger | m3 | water in the supply pipes and in the exchanger (node volumes) |
 | m_cooling_max, eps | kg/s, 1 | cooling-water flow at a fully open valve, exchanger effectiveness |
 | K_p_return, T_i_return | 1/K, s | return-temperature PI of the cooling-water valve |
+| m_flow_limited, limited_from, limited_until | kg/s, s, s | a temporary flow limit (a fault to test with; < 0: none) between two times of the bench's clock |
 Tests: tests/phil/test_bench.py (follows a constant set-point within its limits; ledger closes).
 """
 from __future__ import annotations
@@ -47,7 +48,8 @@ class SpaceHeatingBench(BenchModel):
     DEFAULTS = {"T_inlet": 70.0, "T_cooling": 12.0, "m_flow_max": 0.5, "tau_pump": 5.0,
                 "t_valve": 90.0, "K_p_supply": 0.05, "T_i_supply": 60.0, "V_supply": 0.004,
                 "V_exchanger": 0.002, "m_cooling_max": 0.5, "eps": 0.8, "K_p_return": 0.2,
-                "T_i_return": 5.0, "T_init": 30.0, "tau_sensor": 20.0}
+                "T_i_return": 5.0, "T_init": 30.0, "tau_sensor": 20.0, "m_flow_limited": -1.0,
+                "limited_from": 0.0, "limited_until": 0.0}
 
     def __init__(self, doc, seed: int = 0) -> None:
         super().__init__(doc, seed)
@@ -64,7 +66,10 @@ class SpaceHeatingBench(BenchModel):
 
     def advance(self, h: float) -> None:
         p, x, u = self.p, self.x, self.inputs
-        m_set = min(max(u["m_flow_set"], 0.0), p["m_flow_max"])
+        m_max = p["m_flow_max"]
+        if p["m_flow_limited"] >= 0.0 and p["limited_from"] <= self.t < p["limited_until"]:
+            m_max = min(m_max, p["m_flow_limited"])       # a pump fault or a throttled valve
+        m_set = min(max(u["m_flow_set"], 0.0), m_max)
         x["m_flow"] += (m_set - x["m_flow"]) * min(h / p["tau_pump"], 1.0)
         m, T_sup, T_ret, T_in = x["m_flow"], x["T_sup"], x["T_ret"], x["T_inlet"]
         # supply PI on the measured supply; the actuator moves at most h / t_valve

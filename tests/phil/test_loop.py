@@ -17,6 +17,7 @@ import pytest
 
 from phil.emulator.server import BenchServer
 from phil.loop import PhilLoop, PhilOptions
+from phil.report import format_report
 
 ROOT = Path(__file__).resolve().parents[2]
 # 150x real time at 2 s steps: 13 ms a step for the exchange and the model (median ~1 ms on a
@@ -83,19 +84,29 @@ def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
         assert abs(json.loads(out.strip().splitlines()[-1])["ledger"].get("residual", 0.0)) < 1e-3
 
 
-def test_bench_below_the_requested_flow_cools_the_room_and_reports_the_deficit(tmp_path):
-    proc, port = _bench_process("--param", "m_flow_max=0.004", speed=300.0)     # 0.24 l/min
+def test_bench_below_the_requested_flow_for_two_hours_deficit_reported_and_made_up(tmp_path):
+    # the bench's pump gives at most 0.24 l/min for two hours of its clock (it starts before
+    # the loop: the report finds when from the measurements), type day 1 (January) from midnight
+    proc, port = _bench_process("--param", "m_flow_limited=0.004", "--param", "limited_from=1800",
+                                "--param", "limited_until=9000", speed=600.0)
     try:
         loop = PhilLoop("house1", {"space_heating": ("127.0.0.1", port)},
-                        PhilOptions(speed=300.0, dt=4.0, hours=2.0, typeday=1, warmup_s=120.0))
+                        PhilOptions(speed=600.0, dt=10.0, hours=4.0, typeday=1, start_h=24.0, warmup_s=120.0))
         report = loop.run()
     finally:
-        proc.send_signal(signal.SIGTERM)
-        proc.communicate(timeout=30)
+        _stop(proc)
     b, room = report["benches"]["space_heating"], report["room"]
+    print(json.dumps(b["shortfalls"], indent=1))
     assert b["follow_rms"]["SFW_HCRLbM_Set_l_per_min"] > 1.0      # requested far above what it gives
-    assert room["T_room_min_degC"] < 20.7 and room["degree_hours_below_set_Kh"] > 0.2
-    assert room["first_time_0_5K_below_set_s"] is not None      # when it fell 0.5 K short
+    [short] = b["shortfalls"]
+    assert 1.8 < short["hours"] < 2.2 and short["flow_measured_l_per_min"] < 0.5
+    assert short["flow_requested_l_per_min"] > 3.0
+    assert short["T_room_min_degC"] < 20.5 and short["degree_hours_below_set_Kh"] > 0.3   # the room cooled
+    assert room["first_time_0_5K_below_set_s"] is not None
+    assert short["heat_missing_kWh"] > 5.0                      # about 2 h x the 5.8 kW before
+    assert short["room_back_within_0_1K_s"] > short["end_s"]     # made up afterwards
+    assert abs(short["heat_made_up_kWh"] / short["heat_missing_kWh"] - 1.0) < 0.35
+    assert "flow shortfall" in format_report(report)
 
 
 def _loop(server, tmp_path, **kw):
