@@ -118,7 +118,8 @@ class PhilLoop:
                 link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
             self.channels[name] = BenchChannel(
                 bmap, link, SetpointLimiter(bmap),
-                MeasurementGuard(bmap, options.stale_s, options.stop_s, time.monotonic()), WIRINGS[bmap.id])
+                MeasurementGuard(bmap, options.stale_s, options.stop_s, time.monotonic()).check_units(
+                    WIRINGS[bmap.id].pairs), WIRINGS[bmap.id])
         self.recorder = None
         for server in servers:
             server.start()
@@ -189,7 +190,7 @@ class PhilLoop:
             except ExchangeError as exc:
                 failure = f"{exc.kind}: {exc.detail}"
             wall = time.monotonic()
-            judged = ch.guard.judge(measured, wall, failure, getattr(ch.link, "reasons", None))
+            judged = ch.guard.judge(measured, wall, failure, getattr(ch.link, "reasons", None), ch.sent)
             for iname, j in judged.items():
                 if not j.ok:
                     self._event({"kind": "rejected", "device": name, "point": iname,

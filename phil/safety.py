@@ -6,10 +6,17 @@ MeasurementGuard: a measurement that is NaN, out of its map range, or not fresh 
 exchange) is rejected with the interface named; the last good value is held and flagged. A
 measurement rejected (or never good) for longer than `stale_s` of wall time is stale; past
 `stop_s` the guard asks the loop to send the safe set-points and stop.
+
+Wrong unit: a measurement paired with a set-point (the wiring's pairs) is checked for
+plausibility against it. When, for UNIT_WINDOW exchanges in a row with the set-point active, the
+measurement is far from the set-point (more than UNIT_OFF relative) but within UNIT_FIT of the
+set-point converted to a unit commonly mistaken for the map's (l/h for l/min, W for kW, K or
+degF for degC ...), it is rejected as `wrong unit`, naming both units, until it fits again.
 """
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 
 from phil.benchmap import BenchMap
@@ -57,6 +64,42 @@ class GuardState:
     rejected: dict[str, int] = field(default_factory=dict)
 
 
+#: units a bench may report in place of the map's: (name, a, b) with reading = a x value + b.
+#: Only those that read far above the set-point: a reading far below it (l/s for l/min) is what a
+#: bench that cannot follow shows too, and must stay that bench's (held, then stale) case.
+UNIT_SUSPECTS: dict[str, tuple[tuple[str, float, float], ...]] = {
+    "l/min": (("l/h", 60.0, 0.0),),
+    "°C": (("K", 1.0, 273.15), ("°F", 1.8, 32.0)),
+    "kW": (("W", 1000.0, 0.0),),
+    "kWh": (("Wh", 1000.0, 0.0), ("MJ", 3.6, 0.0)),
+}
+UNIT_WINDOW, UNIT_OFF, UNIT_FIT = 8, 0.3, 0.1
+#: a set-point is active (says something about the reading) above this share of its range's span
+UNIT_ACTIVE = 0.03
+
+
+class UnitCheck:
+    """The wrong-unit test of one measurement against its set-point (see the module text)."""
+
+    def __init__(self, unit: str, span: float) -> None:
+        self.unit, self.span = unit, span
+        self.suspects = UNIT_SUSPECTS.get(unit, ())
+        self.verdicts: deque[str] = deque(maxlen=UNIT_WINDOW)
+
+    def verdict(self, setpoint: float, value: float) -> str:
+        """'' while plausible; else the unit the readings look like."""
+        if not self.suspects or math.isnan(value) or abs(setpoint) < UNIT_ACTIVE * self.span:
+            return self.verdicts[-1] if len(self.verdicts) == UNIT_WINDOW and len(set(self.verdicts)) == 1 else ""
+        near = lambda want: abs(value - want) <= UNIT_FIT * max(abs(want), 1e-9)  # noqa: E731
+        guess = ""
+        if abs(value - setpoint) > UNIT_OFF * abs(setpoint):
+            guess = next((name for name, a, b in self.suspects if near(a * setpoint + b)), "")
+        self.verdicts.append(guess)
+        if len(self.verdicts) == UNIT_WINDOW and guess and all(v == guess for v in self.verdicts):
+            return guess
+        return ""
+
+
 class MeasurementGuard:
     """Judges each exchange's measurements of one bench (device units, wall-time limits)."""
 
@@ -66,9 +109,18 @@ class MeasurementGuard:
         self.stale_s = bench.stale_s if stale_s is None else stale_s
         self.stop_s = bench.stop_s if stop_s is None else stop_s
         self.state = {i.name: GuardState(since_good=start_wall) for i in bench.measurements()}
+        self.pairs: dict[str, tuple[str, UnitCheck]] = {}
+
+    def check_units(self, pairs: tuple[tuple[str, str], ...]) -> "MeasurementGuard":
+        """Check these (set-point, measurement) pairs for a wrong unit (see the module text)."""
+        for s, m in pairs:
+            p = self.bench.dmap.point(m)
+            if p.unit in UNIT_SUSPECTS and p.range:
+                self.pairs[m] = (s, UnitCheck(p.unit, p.range[1] - p.range[0]))
+        return self
 
     def judge(self, measured: dict[str, float] | None, wall: float, failure: str = "",
-              reasons: dict[str, str] | None = None) -> dict[str, Judged]:
+              reasons: dict[str, str] | None = None, sent: dict[str, float] | None = None) -> dict[str, Judged]:
         """Measured values (None: the exchange failed, `failure` says how; `reasons`: why single
         measurements came without a value, as from a silent bench PLC) -> judged values."""
         out = {}
@@ -78,6 +130,12 @@ class MeasurementGuard:
             reason = self._reject(i.name, value) if measured is not None else (failure or "no answer")
             if measured is not None and reasons and i.name in reasons:
                 reason = reasons[i.name]
+            elif measured is not None and sent and i.name in self.pairs:
+                s, check = self.pairs[i.name]
+                unit = check.verdict(sent[s], value)
+                if unit:
+                    reason = (f"wrong unit ({value:g} for a set-point of {sent[s]:g} {check.unit}: reads like "
+                              f"{unit}; the map says {check.unit}: fix the bench PLC's scaling or the map's unit)")
             if not reason:
                 st.good, st.since_good = value, wall
                 out[i.name] = Judged(value, True)

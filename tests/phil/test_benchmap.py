@@ -66,10 +66,27 @@ def test_setpoint_without_rate_limit_is_named(tmp_path):
     assert "[point SFW_HCRLbM_Set_l_per_min] rate_limit = None" in text and "add rate_limit" in text
 
 
-def test_all_problems_at_once(tmp_path):
+def test_five_kinds_of_mistakes_at_once_each_named(tmp_path):
     path = tmp_path / "space_heating.toml"
-    path.write_text(GOOD.replace("range = [20.0, 80.0]", "range = [80.0, 20.0]")
-                    .replace(', direction = "from_bench", signal = "T_inlet"', ', signal = "T_inlet"'))
+    path.write_text(GOOD.replace("range = [20.0, 80.0]", "range = [80.0, 20.0]")                  # 1 inverted range
+                    .replace(', direction = "from_bench", signal = "T_inlet"', ', signal = "T_inlet"')   # 2 no direction
+                    .replace("rate_limit = 5.0, ", "")                                          # 3 no rate limit
+                    .replace('unit = "l/min", range = [0.0, 40.0]', 'unit = "l/mn", range = [0.0, 40.0]')  # 4 unknown unit
+                    .replace('table = "input",   address = 2, type = "int16"',                   # 5 overlap
+                             'table = "input",   address = 1, type = "int16"'))
     with pytest.raises(DeviceMapError) as err:
         load_bench_map(path)
-    assert "range = [80.0, 20.0]" in str(err.value) and "missing key 'direction'" in str(err.value)
+    lines = str(err.value).splitlines()
+    for point, what in (("STM_HCVLaM_Set_degC", "range = [80.0, 20.0]"), ("STM_HCVLbM_degC", "missing key 'direction'"),
+                        ("SFW_HCRLbM_Set_l_per_min", "rate_limit = None"), ("SFW_HCRLbM_l_per_min", "unit = 'l/mn'"),
+                        ("STM_HCRL_degC", "overlaps SFW_HCRLbM_l_per_min")):
+        assert any(f"space_heating.toml [point {point}]" in line and what in line for line in lines), (point, lines)
+    assert all(str(path) in line for line in lines)          # every line names the file
+
+
+def test_serve_offset_overlapping_the_setpoints_is_named(tmp_path):
+    path = tmp_path / "space_heating.toml"
+    path.write_text(GOOD.replace("stop_s = 30.0", "stop_s = 30.0\nserve_offset = 2"))
+    with pytest.raises(DeviceMapError) as err:
+        load_bench_map(path)
+    assert "[phil] serve_offset = 2: below the set-points' holding registers (up to 2)" in str(err.value)

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from phil.emulator.server import BenchServer
+from phil.benchmap import load_bench_map
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
 
@@ -194,3 +195,28 @@ def test_operator_stop_file(tmp_path):
     finally:
         server.stop()
     assert report["stop_reason"].startswith("operator stop")
+
+
+def test_bench_reporting_l_per_h_where_the_map_says_l_per_min(tmp_path):
+    """The bench PLC scales its flow meter in l/h; the twin's map says l/min. The readings are in
+    range while the flow is low and sixty times the set-point: rejected as a wrong unit, named."""
+    text = (ROOT / "phil" / "maps" / "space_heating.toml").read_text()
+    old = 'unit = "l/min", range = [0.0, 40.0], direction = "from_bench", signal = "m_flow"'
+    assert old in text
+    (tmp_path / "space_heating.toml").write_text(
+        text.replace(old, 'unit = "l/h", range = [0.0, 2400.0], direction = "from_bench", signal = "m_flow"'))
+    server = BenchServer("space_heating", speed=100.0, bench_map=load_bench_map(tmp_path / "space_heating.toml")).start()
+    try:
+        loop = _loop(server, tmp_path, stale_s=0.5, stop_s=2.0, start_h=24.0, hours=0.5)
+        report = loop.run()
+        time.sleep(0.1)
+        inputs = dict(server.model.inputs)
+    finally:
+        server.stop()
+    assert "space_heating.SFW_HCRLbM_l_per_min" in report["stop_reason"]
+    wrong = [e for e in _events(tmp_path / "run") if e["kind"] == "rejected" and "wrong unit" in e["reason"]]
+    assert wrong and {e["point"] for e in wrong} == {"SFW_HCRLbM_l_per_min"}
+    assert "reads like l/h; the map says l/min" in wrong[0]["reason"]
+    assert inputs["m_flow_set"] == 0.0 and inputs["T_sup_set"] == 20.0      # safe set-points sent
+    head, rows = _rows(tmp_path / "run")
+    assert rows[-1][head.index("space_heating.SFW_HCRLbM_l_per_min.flag")] == "1" and len(rows[-1]) == len(head)
