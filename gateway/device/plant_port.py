@@ -6,13 +6,14 @@ Every plant access of the gateway goes through one PlantPort, so the lock sits i
 from __future__ import annotations
 
 import threading
-from typing import Any
+
+from plant.protocol import Plant
 
 
 class PlantPort:
     """Serialised access to a house: get/set/release/step under one re-entrant lock."""
 
-    def __init__(self, house: Any) -> None:
+    def __init__(self, house: Plant) -> None:
         self.house = house
         self.lock = threading.RLock()
 

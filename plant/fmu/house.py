@@ -21,8 +21,13 @@ built-in controller the twin could hand it to.  `controller` is accepted for loa
 compatibility and recorded; what the FMU does without commands is the FMU's business (e.g. the
 exported house FMU's `use_builtin_controller` parameter, set in [parameters]).
 
+Bindings and replay as the native house (the Plant protocol, plant/protocol.py): bind() makes
+inputs follow a time series (linear at each step's midpoint, or hold), drive() replays a command
+table from t = 0 with a change applied at the midpoint between two samples.
+
 Not available: snapshot/restore (an FMU's state cannot be copied portably), ledger() and
-stored_energy() (no energy bookkeeping inside a foreign plant); each raises ConfigError.
+stored_energy() (no energy bookkeeping inside a foreign plant), state()/set_state() (an FMU has
+no per-instance state vector the twin could address); each raises ConfigError naming it.
 """
 from __future__ import annotations
 
@@ -73,6 +78,7 @@ class FmuHouse:
         self._s[self._in_index] = self._fmu.input_starts
         self._remote = np.zeros(len(self.catalogue), dtype=np.bool_)
         self._s[self._out_index] = self._fmu.read_outputs()
+        self._series: dict[int, tuple] = {}  # bound input index -> (times, values, linear)
 
     def close(self) -> None:
         """Free the FMU instance; the house cannot step afterwards (reset() makes a new one)."""
@@ -92,6 +98,12 @@ class FmuHouse:
 
     def ledger(self) -> dict[str, float]:
         raise self._no("the energy ledger")
+
+    def state(self, instance: str) -> np.ndarray:
+        raise self._no(f"state({instance!r}) (an FMU has no per-instance state vector)")
+
+    def set_state(self, instance: str, values) -> None:
+        raise self._no(f"set_state({instance!r}) (an FMU has no per-instance state vector)")
 
     def stored_energy(self) -> float:
         raise self._no("the stored energy")
@@ -126,6 +138,65 @@ class FmuHouse:
     def is_remote(self, name: str) -> bool:
         return bool(self._remote[self._signal(name).index])
 
+    # --- bindings: inputs that follow a time series ------------------------------------------
+    def bind(self, names: list[str], times, values, interpolation: str = "linear") -> None:
+        """Inputs `names` follow the columns of `values` [len(times), len(names)] over `times`
+        [s since start], as House.bind: "linear" at each step's midpoint, "hold" keeps a sample
+        until the next; bound inputs are remote."""
+        if interpolation not in ("linear", "hold"):
+            raise ValueError(f"bind: interpolation = {interpolation!r}; allowed: linear, hold")
+        times = np.asarray(times, dtype=np.float64)
+        values = np.asarray(values, dtype=np.float64).reshape(len(times), len(names))
+        if len(times) == 0 or not np.all(np.diff(times) > 0):
+            raise ValueError("bind: times must be increasing, at least one sample")
+        for j, n in enumerate(names):
+            sig = self._signal(n)
+            sig.require_input()
+            self._series[sig.index] = (times, values[:, j].copy(), interpolation == "linear")
+            self._remote[sig.index] = True
+
+    def unbind(self, names: list[str] | None = None) -> None:
+        """Stop following the series of `names` (all when None); they keep their last value."""
+        if names is None:
+            self._series.clear()
+            return
+        for n in names:
+            self._series.pop(self._signal(n).index, None)
+
+    def _follow(self, t: float) -> None:
+        """Bound inputs at time t (a step's midpoint)."""
+        for i, (times, values, linear) in self._series.items():
+            if linear:
+                self._s[i] = np.interp(t, times, values)
+            else:
+                self._s[i] = values[max(0, int(np.searchsorted(times, t, side="right")) - 1)]
+
+    def advance(self, t: float) -> None:
+        """Advance to time t [s since start]."""
+        if t > self.t:
+            self.step(t - self.t)
+
+    def drive(self, times: np.ndarray, names: list[str], cmd: np.ndarray) -> np.ndarray:
+        """Replay a command table from t = 0, as House.drive: the inputs `names` hold cmd[i] from
+        the midpoint before times[i] to the midpoint after it; returns the bound signals at
+        `times` [len(times), signals]. A span is split at the midpoint and into steps of at most
+        5 s (the native house's internal step)."""
+        times = np.asarray(times, dtype=np.float64)
+        cmd = np.asarray(cmd, dtype=np.float64).reshape(len(times), len(names))
+        if self.t != 0.0 or not np.all(np.diff(times) > 0) or times[0] < 0:
+            raise ValueError("drive: starts at t = 0 with increasing sample times >= 0")
+        switch = np.concatenate([[min(0.0, times[0])], 0.5 * (times[:-1] + times[1:])])
+        self.bind(names, switch, cmd, interpolation="hold")
+        out = np.empty((len(times), len(self.catalogue)))
+        for i, t in enumerate(times):
+            edges = [e for e in (switch[i],) if self.t < e < t] + [t]
+            for e in edges:
+                while e - self.t > 1e-9:
+                    self.step(min(5.0, e - self.t))
+            self._follow(t)
+            out[i] = self._s
+        return out
+
     # --- time ------------------------------------------------------------------------------
     def step(self, dt: float) -> None:
         """Advance by dt seconds: inputs to the FMU, FMU step(s), outputs back."""
@@ -134,6 +205,7 @@ class FmuHouse:
         if self._fmu is None:
             raise ConfigError(f"{self.name}: the FMU was closed; reset() instantiates it again")
         n = max(1, math.ceil(dt / self.spec.max_step - 1e-9)) if self.spec.max_step else 1
+        self._follow(self.t + 0.5 * dt)
         self._fmu.set_inputs(self._s[self._in_index])
         for _ in range(n):
             y = self._fmu.step(dt / n)

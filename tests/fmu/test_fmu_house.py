@@ -146,3 +146,39 @@ def test_fmu_house_on_an_accelerated_paced_clock(house_file):
     assert house.t >= 100.0  # kept pace: 100 simulated s in about 0.5 s of wall time
     assert report["lateness"]["steps"] >= 100 and report["lateness"]["median_ms"] < 5.0
     house.close()
+
+
+def test_both_houses_implement_the_plant_protocol_and_replay_a_command_table_alike(house_file):
+    """plant/protocol.py: House and FmuHouse are Plants; drive() replays the same command table on
+    both (bind, midpoint holds) to the same readings; what an FMU cannot give is a ConfigError
+    naming the capability, not an AttributeError."""
+    from plant.errors import ConfigError
+    from plant.fmu.house import FmuHouse
+    from plant.protocol import Plant
+
+    fmu = load_house(house_file, controller="external")
+    native = load_house("house1", controller="external")
+    try:
+        assert isinstance(fmu, FmuHouse) and isinstance(fmu, Plant) and isinstance(native, Plant)
+        times = np.arange(0.0, 1800.0 + 1.0, 60.0)
+        names = ["boiler.U_set", "mixer.m_flow_set"]
+        # the boiler fires for 10 min from minute 5, the heating pump runs from minute 12
+        cmd = np.column_stack([np.where((times >= 300) & (times < 900), 10.0, 0.0),
+                               np.where(times >= 720, 0.3, 0.0)])
+        for n in INPUTS:
+            if n not in names:
+                native.set(n, fmu.get(n))  # the FMU's start values
+        a, b = fmu.drive(times, names, cmd), native.drive(times, names, cmd)
+        cols = [native.catalogue.index(n) for n in fmu.catalogue.names]
+        b = b[:, cols]
+        assert a.shape == b.shape and fmu.t == native.t == 1800.0
+        sensors = [fmu.catalogue.index(n) for n in SENSORS + ["boiler.T_sup"]]
+        assert np.abs(a[:, sensors] - b[:, sensors]).max() < 0.05  # K: internal steps differ, not the model
+        q = fmu.catalogue.index("boiler.Q_flow")
+        assert a[:, q].max() > 1000.0 and abs(a[:, q].sum() - b[:, q].sum()) < 0.01 * b[:, q].sum()
+        assert fmu.get("boiler.U_set") == 0.0 and fmu.is_remote("boiler.U_set")  # the last sample holds
+        for call in (lambda: fmu.state("storage"), lambda: fmu.set_state("storage", [50.0]), fmu.ledger):
+            with pytest.raises(ConfigError, match="not available when the plant is an FMU"):
+                call()
+    finally:
+        fmu.close()
