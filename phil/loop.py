@@ -155,6 +155,7 @@ class PhilLoop:
         """Exchange with every bench, then advance the house by dt (runs on the clock's thread)."""
         if self._done.is_set():
             return
+        began = time.perf_counter()
         try:
             warming = self.warmed < self.o.warmup_s
             row = self._exchange_all(dt, counted=not warming)
@@ -169,6 +170,7 @@ class PhilLoop:
             self.house.step(dt)
             if not warming:
                 self.tally.after_step(self.house, dt)
+                self.tally.step_s.append(time.perf_counter() - began)
             self._record(row, self.house.t)
             reason = self._why_stop()
             if reason:
@@ -291,6 +293,7 @@ class PhilLoop:
         for ch in self.channels.values():
             ch.link.close()
         report = self.tally.report(self.house, self.stop_reason, self.clock.lateness())
+        report["cycle_s"] = self.o.dt / self.o.speed
         if self.recorder:
             self.recorder.close({"report": report})
             import json

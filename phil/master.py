@@ -80,10 +80,14 @@ class BenchLink:
 
     def _check(self, result: object, what: str) -> object:
         if result is None:
+            self.client.close()
             raise ExchangeError(self.bench.id, "timeout", f"no answer to {what}")
         if result.isError():
             code = getattr(result, "exception_code", None)
             if code is None:
+                # a late answer may still arrive on this connection and be taken for the next
+                # request's: start the next exchange on a fresh connection
+                self.client.close()
                 raise ExchangeError(self.bench.id, "timeout", f"{what}: {result}")
             raise ExchangeError(self.bench.id, "exception", f"exception {int(code):02d} to {what}")
         return result

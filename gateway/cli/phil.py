@@ -13,6 +13,7 @@ EXAMPLES = """examples:
   twin phil house1 --bench space_heating=serve:127.0.0.1:5040 --speed 60 --hours 1   # the PLC polls
   twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 \
       --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
+  twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md)
 """
@@ -21,8 +22,8 @@ EXAMPLES = """examples:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), 'lint' or 'table'")
-    p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path)")
+    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), 'lint', 'table' or 'compare'")
+    p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path); with 'compare': the run directory")
     p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
     p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT",
                    help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address the twin "
@@ -57,6 +58,15 @@ def run(args: argparse.Namespace) -> int:
         problems = lint_bench_maps()
         print("\n".join(problems) or "bench maps: no problems")
         return 1 if problems else 0
+    if args.house == "compare":
+        from phil.compare import compare, to_markdown
+
+        if not args.bench_map:
+            raise ConfigError("twin phil compare: give the run directory, e.g. twin phil compare runs/sf1")
+        result = compare(args.bench_map)
+        print(to_markdown(result), end="")
+        print(f"written: {args.bench_map}/compare.md, " + ", ".join(result.get("plots", [])))
+        return 0
     if args.house == "table":
         from gateway.maps.export import to_csv, to_markdown
         from phil.benchmap import load_bench_map
