@@ -2,7 +2,7 @@
 
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0),
                  record="runs/today")
-    rt.add_modbus_tcp("127.0.0.1", 0); rt.add_canopen("virtual:house1")
+    rt.add("modbus-tcp", host="127.0.0.1", port=0); rt.add("canopen", bus="virtual:house1")
     with rt:                      # starts transports and the clock
         rt.clock.step(60)         # lock-step: 60 plant steps of 1 s (devices tick, recorder writes)
     print(rt.audit.text())
@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -23,6 +22,7 @@ from gateway.clock import LockStepClock, PacedClock
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.maps.loader import load_all
+from gateway.transports.base import Transport
 from gateway.transports.registry import transport_class
 from plant.errors import ConfigError
 from profiles.recording import Recorder
@@ -53,8 +53,8 @@ class Runtime:
         self.devices = {k: Device(m, self.port, now=lambda: self.port.t, read_only=read_only)
                         for k, m in sorted(maps.items())}
         for d in self.devices.values():
-            d.subscribe(self._event)
-        self.transports: list[Any] = []
+            d.subscribe(self.event)
+        self.transports: list[Transport] = []
         self.step_wall: list[float] = []
         self.pending_faults: list = []  # gateway.faults.Fault, sorted by time
 
@@ -62,29 +62,19 @@ class Runtime:
         self.pending_faults = sorted([*self.pending_faults, *faults], key=lambda f: f.at)
 
     # --- wiring ------------------------------------------------------------------------------
-    def _event(self, ev: dict) -> None:
+    def event(self, ev: dict) -> None:
+        """Record a device or transport event (audit, and events.csv when recording)."""
         ev.setdefault("t", self.port.t)
         self.audit.event(ev)
         if self.recorder:
             self.recorder.event(ev)
 
-    def add_modbus_tcp(self, host: str = "127.0.0.1", port: int = 5020, allow=None,
-                       max_connections: int = 64, idle_timeout: float = 60.0):
-        # malformed frames and refused connections go to the audit only: a flood must not fill events.csv
-        tr = transport_class("modbus-tcp")(self.devices.values(), host=host, port=port, allow=allow,
-                                           max_connections=max_connections, idle_timeout=idle_timeout,
-                                           on_event=self.audit.event)
-        self.transports.append(tr)
-        return tr
-
-    def add_modbus_rtu(self, serial_port: str, baudrate: int = 19200):
-        tr = transport_class("modbus-rtu")(self.devices.values(), serial_port, baudrate=baudrate)
-        self.transports.append(tr)
-        return tr
-
-    def add_canopen(self, bus: str = "virtual:house1"):
-        tr = transport_class("canopen")(self.devices.values(), bus, on_event=self._event,
-                                        now=lambda: self.port.t)
+    def add(self, name: str, **options) -> Transport:
+        """Serve the devices over the transport registered as `name` (gateway/transports/
+        registry.py: "modbus-tcp", "modbus-rtu", "canopen") with its constructor's options, e.g.
+        add("modbus-tcp", host="127.0.0.1", port=0), add("canopen", bus="virtual:house1")."""
+        cls = transport_class(name)
+        tr = cls(self.devices.values(), **{**cls.hooks(self), **options})
         self.transports.append(tr)
         return tr
 
@@ -101,9 +91,7 @@ class Runtime:
         for d in self.devices.values():
             d.tick(t)
         for tr in self.transports:
-            wake = getattr(tr, "wake", None)
-            if wake:
-                wake()
+            tr.wake()
         if self.recorder:
             self.recorder.signals(t, values)
         self.step_wall.append(time.perf_counter() - w0)

@@ -95,12 +95,13 @@ def serve(args) -> int:
     rt.schedule(faults)
     loop = install(args.loop)
     if args.modbus_tcp:
-        tcp = rt.add_modbus_tcp(*args.modbus_tcp, allow=args.allow, max_connections=args.max_connections,
-                                idle_timeout=args.idle_timeout)
+        host, port = args.modbus_tcp
+        tcp = rt.add("modbus-tcp", host=host, port=port, allow=args.allow, max_connections=args.max_connections,
+                     idle_timeout=args.idle_timeout)
     if args.modbus_rtu:
-        rtu = rt.add_modbus_rtu(args.modbus_rtu, args.baud)
+        rtu = rt.add("modbus-rtu", port=args.modbus_rtu, baudrate=args.baud)
     if args.can:
-        rt.add_canopen(args.can)
+        rt.add("canopen", bus=args.can)
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     rt.start()

@@ -58,8 +58,8 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
     rt = build(district, entry, out, tick)
     house = rt.house
     if serve:
-        tcp = rt.add_modbus_tcp(host, district.modbus_port(name))
-        rt.add_canopen(district.can_bus(name))
+        tcp = rt.add("modbus-tcp", host=host, port=district.modbus_port(name))
+        rt.add("canopen", bus=district.can_bus(name))
     fed = engine.Federate(name, broker, district.step, interface=interface)
     pub_key, sub_key = engine.keys(district.name, name)
     pub = fed.publication(pub_key)

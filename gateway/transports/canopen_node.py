@@ -301,6 +301,10 @@ class CanopenTransport(Transport):
 
     name = "canopen"
 
+    @classmethod
+    def hooks(cls, runtime) -> dict:
+        return {"on_event": runtime.event, "now": lambda: runtime.port.t}
+
     def __init__(self, devices: Iterable, bus: str = "virtual:house1", *,
                  on_event: Callable[[dict], None] | None = None,
                  now: Callable[[], float] = time.monotonic) -> None:

@@ -27,6 +27,11 @@ class ModbusTcpTransport(Transport):
 
     name = "modbus-tcp"
 
+    @classmethod
+    def hooks(cls, runtime) -> dict:
+        # malformed frames and refused connections go to the audit only: a flood must not fill events.csv
+        return {"on_event": runtime.audit.event}
+
     def __init__(self, devices: Iterable[Device], host: str = "127.0.0.1", port: int = 5020,
                  allow: Iterable[str] | None = None, max_connections: int = 64,
                  idle_timeout: float = 60.0, on_event: Callable[[dict], Any] | None = None) -> None:

@@ -48,9 +48,9 @@ def make_runtime(record: Path, modbus: bool = True, can: str | None = None) -> R
     rt = Runtime(load_house("house1", start=START, controller="external"), clock=LockStepClock(1.0),
                  record=record, record_interval=float(RECORD))
     if modbus:
-        rt.add_modbus_tcp("127.0.0.1", 0)
+        rt.add("modbus-tcp", host="127.0.0.1", port=0)
     if can:
-        rt.add_canopen(can)
+        rt.add("canopen", bus=can)
     return rt
 
 

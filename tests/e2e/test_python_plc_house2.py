@@ -78,7 +78,7 @@ def test_python_plc_house2_one_winter_day_matches_the_built_in_rules(tmp_path: P
     plc_module = load_example("python-plc", "house2_controller")
     rt = Runtime(load_house("house2", start=START, controller="external"), clock=LockStepClock(1.0),
                  record=tmp_path / "run", record_interval=float(RECORD))
-    rt.add_modbus_tcp("127.0.0.1", 0)
+    rt.add("modbus-tcp", host="127.0.0.1", port=0)
     with rt:
         assert "storage_io_house2" in rt.devices
         plc = plc_module.HeatPumpPLC("127.0.0.1", modbus_port(rt))
@@ -117,7 +117,7 @@ def test_python_plc_house2_survives_a_gateway_restart(tmp_path: Path):
     plc_module = load_example("python-plc", "house2_controller")
     rt = Runtime(load_house("house2", start=START, controller="external"), clock=LockStepClock(1.0),
                  record=tmp_path / "run", record_interval=float(RECORD))
-    rt.add_modbus_tcp("127.0.0.1", 0)
+    rt.add("modbus-tcp", host="127.0.0.1", port=0)
     with rt:
         port = modbus_port(rt)
         plc = plc_module.HeatPumpPLC("127.0.0.1", port)

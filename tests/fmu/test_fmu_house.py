@@ -54,7 +54,7 @@ def test_runtime_serves_the_fmu_plant_over_modbus_like_the_native_house(house_fi
     assert house.catalogue.names == [n for n in CATALOGUE.names if n in INPUTS + OUTPUTS]
     rt = Runtime(house, clock=LockStepClock(1.0), record=tmp_path / "run")
     assert {"boiler_wolf_cgb", "storage_io"} <= set(rt.devices)
-    tcp = rt.add_modbus_tcp("127.0.0.1", 0)
+    tcp = rt.add("modbus-tcp", host="127.0.0.1", port=0)
     rt.start()
     client = ModbusTcpClient("127.0.0.1", port=tcp.port, timeout=2)
     client.connect()

@@ -56,8 +56,8 @@ def house2(request):
     """House 2 with Modbus TCP and CANopen, a master node for the CHA-10 on a unique channel."""
     bus = f"virtual:hp-{uuid.uuid4().hex[:8]}"
     rt = Runtime(load_house("house2", controller="external"), clock=LockStepClock(1.0))
-    tcp = rt.add_modbus_tcp("127.0.0.1", 0)
-    rt.add_canopen(bus)
+    tcp = rt.add("modbus-tcp", host="127.0.0.1", port=0)
+    rt.add("canopen", bus=bus)
     rt.start()
     client = ModbusTcpClient("127.0.0.1", port=tcp.port, timeout=2, retries=0)
     assert client.connect()
@@ -115,7 +115,7 @@ def test_out_of_range_modulation_is_refused_on_both_buses_while_the_plant_steps(
 def substation_house():
     bus = f"virtual:dh-{uuid.uuid4().hex[:8]}"
     rt = Runtime(load_house("house1", start="2021-01-10", controller="external"), clock=LockStepClock(10.0))
-    rt.add_canopen(bus)
+    rt.add("canopen", bus=bus)
     rt.start()
     master = canopen.Network(open_bus(bus))
     master.connect()

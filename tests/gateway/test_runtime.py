@@ -22,7 +22,7 @@ BOILER = 2  # unit id of boiler_wolf_cgb
 def runtime(tmp_path):
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0),
                  record=tmp_path / "run")
-    tcp = rt.add_modbus_tcp("127.0.0.1", 0)
+    tcp = rt.add("modbus-tcp", host="127.0.0.1", port=0)
     rt.start()
     client = ModbusTcpClient("127.0.0.1", port=tcp.port, timeout=2)
     client.connect()
@@ -110,7 +110,7 @@ def test_runtime_serves_canopen_nodes_with_live_plant_values(tmp_path):
 
     bus = f"virtual:rt-{uuid.uuid4().hex[:8]}"
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0))
-    rt.add_canopen(bus)
+    rt.add("canopen", bus=bus)
     rt.start()
     master = canopen.Network(open_bus(bus))
     master.connect()
@@ -138,7 +138,7 @@ def test_scheduled_can_bus_off_silences_the_node_and_is_recorded(tmp_path):
     bus_spec = f"virtual:bo-{uuid.uuid4().hex[:8]}"
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0),
                  record=tmp_path / "rec")
-    rt.add_canopen(bus_spec)
+    rt.add("canopen", bus=bus_spec)
     node_id = rt.devices["chp_neotower2"].map.canopen.node_id
     rt.schedule([Fault(5.0, "chp_neotower2", "can_bus_off"), Fault(10.0, "chp_neotower2", "can_recover")])
     rt.start()

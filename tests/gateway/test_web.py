@@ -30,7 +30,7 @@ def gateway():
     """A lock-step runtime with Modbus TCP and the live view (token set), its boiler driven by a
     Modbus client at 10 V, stepped 200 s (the watchdog, 300 s, stays armed)."""
     rt = Runtime(load_house("house1", controller="external"), clock=LockStepClock(1.0))
-    tcp = rt.add_modbus_tcp("127.0.0.1", 0)
+    tcp = rt.add("modbus-tcp", host="127.0.0.1", port=0)
     rt.start()
     web = LiveServer(rt, "127.0.0.1", 0, token=TOKEN)
     web.start()
