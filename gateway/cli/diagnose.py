@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import sys
 from pathlib import Path
 
@@ -41,12 +40,12 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from plant.house import load_spec
-    from plant.diagnose import diagnose, recording_io, replay
+    from plant.diagnose import diagnose, recording_io, requirements
     from plant.errors import ConfigError
 
     if args.requirements:
         load_spec(args.requirements)
-        for k, v in replay.requirements().items():
+        for k, v in requirements.requirements().items():
             print(f"{k}:")
             items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
             for name, sub in items:

@@ -141,8 +141,9 @@ def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
 
 def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
     """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
-    window; sets replayer.base to them (every later replay starts from them). -> report entry
-    (its "params": those re-fitted again with each candidate)."""
+    window. -> report entry; its "overrides" (the fitted values and the storage scheme chosen)
+    are what every later replay starts from (Replayer.with_calibration), its "params" those
+    re-fitted again with each candidate."""
     params = nominal_params(house, refit, replayer.instances() - replayer.calibrated)
     refit = [q for q in refit if q.key in {p.name for p in params}]
 
@@ -151,15 +152,16 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
 
     t_end = float(ctx.rec.time[ctx.train].max())
     scheme = choose_storage_scheme(ctx, replayer, t_end)
+    rp = replayer.with_calibration(scheme_overrides(scheme, replayer)) if scheme else replayer
     if not params:
         return {"parameters": [], "train_cost_file": math.nan, "train_cost_refit": math.nan,
-                "storage_scheme": scheme}
+                "storage_scheme": scheme, "overrides": _added(replayer, rp)}
     cache = {}
 
     def F(theta, signals=()):
         key = tuple(round(float(v), 9) for v in theta) + tuple(signals)
         if key not in cache:
-            rows = replayer.run(overrides(theta), until=t_end)
+            rows = rp.run(overrides(theta), until=t_end).rows
             cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train, signals=signals)
         return cache[key]
 
@@ -174,17 +176,18 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
                 theta, _, _ = descent(lambda th: F(th, signals), params, theta, idx)
     rest = [i for i, q in enumerate(refit) if not q.signals]
     theta, J, _ = descent(F, params, theta, rest)
-    replayer.base = {**replayer.base, **overrides(theta)}
+    rp = rp.with_calibration(overrides(theta))
     if scheme is not None:
         # chosen again with the re-fitted values, as each simulate candidate chooses it after its
         # own fit: else a candidate gains by the second choice alone (labsim's 3-day no-effect
         # case: 30 layers before the re-fit, 80 after; every candidate gained 27-36 % with its
         # own parameter at nominal, and storage_mixing was named)
-        again = choose_storage_scheme(ctx, replayer, t_end)
+        again = choose_storage_scheme(ctx, rp, t_end)
+        rp = rp.with_calibration(scheme_overrides(again, rp))
         if again["chosen"] != scheme["chosen"]:
             cache.clear()
             theta, J, _ = descent(F, params, theta, rest)
-            replayer.base = {**replayer.base, **overrides(theta)}
+            rp = rp.with_calibration(overrides(theta))
             again["before_the_refit"] = scheme["chosen"]
         scheme = again
     rows = []
@@ -197,7 +200,12 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
                             theta, ctx.n_eff(ctx.train))
     return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
             "evaluations": len(cache), "params": [p for p, q in zip(params, refit) if q.joint],
-            "identifiability": ident, "storage_scheme": scheme}
+            "identifiability": ident, "storage_scheme": scheme, "overrides": _added(replayer, rp)}
+
+
+def _added(before, after) -> dict:
+    """The base overrides `after` holds that `before` does not (or holds with another value)."""
+    return {k: v for k, v in after.base.items() if k not in before.base or before.base[k] != v}
 
 
 def ranges(nref, refit=NOMINAL_REFIT) -> dict:
@@ -221,17 +229,22 @@ def file_scheme(replayer) -> dict:
 
 def choose_storage_scheme(ctx, replayer, t_end: float) -> dict | None:
     """The STORAGE_SCHEMES entry with the lowest training cost (everything else at the replayer's
-    base); it joins replayer.base. -> {chosen, overrides, train_cost {label: cost}} or None."""
+    base). -> {chosen, overrides (None: the file's), train_cost {label: cost}} or None when the
+    storage is not replayed; scheme_overrides gives what it sets."""
     if "storage" not in replayer.instances() - replayer.calibrated:
         return None
     costs = {}
     for label, ov in STORAGE_SCHEMES:
-        rows = replayer.run(ov or file_scheme(replayer), until=t_end)  # the file's: undo an earlier choice
+        rows = replayer.run(ov or file_scheme(replayer), until=t_end).rows  # the file's: undo an earlier choice
         costs[label] = ctx.cost(rows[:, ctx.cols], ctx.train)
     label = min(costs, key=costs.get)
     chosen = dict(STORAGE_SCHEMES)[label]
-    replayer.base = {**replayer.base, **(chosen or file_scheme(replayer))}
     return {"chosen": label, "overrides": chosen, "train_cost": costs}
+
+
+def scheme_overrides(scheme: dict, replayer) -> dict:
+    """What a chosen storage scheme sets (the file's own values for the file's scheme)."""
+    return scheme["overrides"] or file_scheme(replayer)
 
 
 # identifiability: a calibrated parameter is pinned down when its approximate 1-sigma interval

@@ -1,6 +1,7 @@
 """What every stage of the diagnosis shares: measured signals, windows, operating modes, costs."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -8,7 +9,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..errors import DataError
 from .pipe_sensor import scored_mask
-from .replay import comparable
+from .requirements import comparable
 
 # normalisation of residuals per unit, so that one cost adds temperatures, flows and powers
 SCALE = {"degC": 1.0, "kg/s": 0.02, "W": 500.0}
@@ -28,8 +29,11 @@ MODES = {
 }
 
 
-@dataclass
+@dataclass(frozen=True)
 class Context:
+    """The recording as every stage sees it. Built once from the recording (build); a stage that
+    learns something the later ones judge by (the nominal replay, the unit modes masked) returns
+    a new Context (dataclasses.replace, with_baseline, unit_modes.apply), never changes one."""
     rec: object
     measured: list
     train: np.ndarray        # bool mask of samples used for fitting
@@ -40,12 +44,17 @@ class Context:
     noise: np.ndarray        # estimated white-noise sigma per measured signal
     flags: dict = field(default_factory=dict)
     cols: np.ndarray | None = None  # catalogue indices of the measured signals
-    nominal_rows: np.ndarray | None = None  # the nominal replay, all catalogue signals (set by diagnose)
-    nominal_sim: np.ndarray | None = None   # its measured columns (the baseline every candidate is judged on)
-    alone: dict | None = None               # {instances, signals} of a subsystem replayed alone (diagnose)
-    calibrated: tuple = ()                  # signals of a subsystem calibrated alone on them (diagnose)
-    nominal_ranges: dict = field(default_factory=dict)  # override key -> (lo, hi) the nominal re-fit may take
-    height_fit: dict = field(default_factory=dict)      # storage sensor -> the nominal's sensor_height.HeightFit
+    t_split: float = float("nan")   # end of the training window [s]
+    # the baseline (with_baseline): the nominal replay (replay.Replay: all catalogue signals, its
+    # pipe and storage-sensor reading fits), the measured columns every candidate is judged on
+    # (the nominal's, or the model a further effect goes on top of: forward.py), the subsystem
+    # replayed alone {instances, signals}, the signals of a subsystem calibrated alone on them,
+    # and override key -> (lo, hi) the nominal re-fit may take
+    nominal: object = None
+    nominal_sim: np.ndarray | None = None
+    alone: dict | None = None
+    calibrated: tuple = ()
+    nominal_ranges: dict = field(default_factory=dict)
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None):
@@ -85,10 +94,18 @@ class Context:
         flags = {"chp_on": chp_on, "chp_off": ~chp_on, "boiler_on": boiler_on, "heating_on": heating_on,
                  "dhw_on": dhw_on, "chp_off_heating_on": (~chp_on) & heating_on,
                  "chp_on_boiler_on": chp_on & boiler_on}
-        ctx = cls(rec, measured, train, held, meas, ok, scale, noise, flags)
-        ctx.cols = np.array([CATALOGUE.index(s) for s in measured])
-        ctx.t_split = t_split
-        return ctx
+        return cls(rec, measured, train, held, meas, ok, scale, noise, flags,
+                   cols=np.array([CATALOGUE.index(s) for s in measured]), t_split=t_split)
+
+    def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict) -> "Context":
+        """This context judged against the nominal replay `nominal` (a replay.Replay)."""
+        return dataclasses.replace(self, nominal=nominal, nominal_sim=nominal.rows[:, self.cols], alone=alone,
+                                   calibrated=tuple(calibrated), nominal_ranges=dict(nominal_ranges))
+
+    @property
+    def heights(self) -> dict:
+        """Storage sensor -> its place fitted in the nominal replay (sensor_height.HeightFit)."""
+        return self.nominal.heights if self.nominal is not None else {}
 
     # --- modes -----------------------------------------------------------------------------
     def mode_mask(self, name: str) -> np.ndarray:

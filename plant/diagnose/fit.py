@@ -29,8 +29,10 @@ from .calibration import STORAGE_SCHEMES, file_scheme
 JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
 
 
-@dataclass
+@dataclass(frozen=True)
 class Result:
+    """One candidate's fit; judging it (verdict.judge) or placing it on top of another effect
+    (forward.py) gives a new Result (dataclasses.replace)."""
     id: str
     component: str
     kind: str
@@ -53,6 +55,7 @@ class Result:
     local: dict | None = None          # a sensor candidate judged relative to its neighbours (fit_signal)
     nominal: dict = field(default_factory=dict)  # jointly re-fitted nominal parameters
     pipe: dict = field(default_factory=dict)     # its replay's pipe-sensor fits (pipe_sensor.PipeFit per branch)
+    refitted_with: str | None = None   # a sensor effect fitted again on the model with this plant effect (forward.py)
 
     def public(self) -> dict:
         return {"id": self.id, "component": self.component if self.signal is None else self.signal,
@@ -114,7 +117,7 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     def F(theta):
         key = tuple(round(float(v), 12) for v in theta) + tuple(sorted(scheme.items()))
         if key not in cache:
-            rows = replayer.run(ov(theta), until=t_end)
+            rows = replayer.run(ov(theta), until=t_end).rows
             cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
         return cache[key]
 
@@ -172,14 +175,14 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     n_eff = ctx.n_eff(ctx.train)
     se = [_stderr(along(i), params[i], theta[i], J, n_eff) if i in free else math.nan
           for i in range(len(params))]
-    rows = replayer.run(ov(theta))
+    run = replayer.run(ov(theta))
+    rows = run.rows
     sim = rows[:, ctx.cols]
     r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
                train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect,
                nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **scheme},
-               pipe=dict(replayer.pipe_fit))
-    r.k = len(free)
+               pipe=dict(run.pipe), k=len(free))
     return r
 
 
@@ -270,7 +273,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
             continue
         # a storage sensor's place within its tolerance is fitted again with the candidate
         # (sensor_height.py): the twin's reading before the nominal's shift
-        hf = ctx.height_fit.get(s) if c is not None else None
+        hf = ctx.heights.get(s) if c is not None else None
         if hf is not None:
             y0 = y0 - hf.shift * hf.g
 
@@ -300,7 +303,7 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
                 return effect.apply(t[:len(y)], y, [fit_on(y, m)[0]])
 
             vals, N = replayer.refit_radiator(joint, ctx.train)
-            y0 = replayer.radiator_return(vals, N)
+            y0 = replayer.radiator_return(vals, N, ctx.nominal.pipe)
             v, J, k, f = fit_on(y0)
             nfev += k
         J0 = float(np.mean((ctx.meas[m, j] - y_before[m]) ** 2))
@@ -325,18 +328,16 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     j, v, f, y0, local, y_before = best.j, best.value, best.cost, best.y0, best.local, best.y_before
     sim = nominal_sim.copy()
     m = ctx.train & ctx.ok[:, j]
-    hf = ctx.height_fit.get(ctx.measured[j]) if best.tank is not None else None
+    hf = ctx.heights.get(ctx.measured[j]) if best.tank is not None else None
     sim[:, j] = placed(ctx.meas[:, j], effect.apply(t, y0, [v]), m, hf)
     se = effect.stderr(ctx.meas[m, j] - sim[m, j], ctx.n_eff(ctx.train))
     if se is None:
         se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train))
-    r = Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
-               train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
-               evaluations=nfev, sim=sim, effect=effect)
+    judged_on = None
     if local:
         h = ctx.held & ctx.ok[:, j]
         e0, e1 = ctx.meas[h, j] - y_before[h], ctx.meas[h, j] - sim[h, j]
-        r.local = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
+        judged_on = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
                    "heldout_rms_after": float(np.sqrt(np.mean(e1 ** 2))),
                    "gain": 1.0 - float(np.mean(e1 ** 2)) / max(float(np.mean(e0 ** 2)), 1e-12),
                    "limit": ctx.limit(j),
@@ -344,6 +345,8 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         if ctx.measured[j] in alone:
             # calibrated on this very signal, the subsystem alone has no structural allowance to
             # keep: its residual is a mismatch above the sensor's noise (3 sigma)
-            r.local["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
-            r.local["limit"] = ctx.limit(j, tol=0.0)
-    return r
+            judged_on["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
+            judged_on["limit"] = ctx.limit(j, tol=0.0)
+    return Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
+                  train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
+                  evaluations=nfev, sim=sim, effect=effect, local=judged_on)

@@ -22,7 +22,7 @@ holds every chosen effect (`final`).
 """
 from __future__ import annotations
 
-import copy
+import dataclasses
 
 from . import fit
 from . import verdict as verdict_mod
@@ -32,9 +32,7 @@ MAX_EFFECTS = 3
 
 def _based_on(ctx, sim):
     """The context with `sim` as the model a candidate is judged against."""
-    c = copy.copy(ctx)
-    c.nominal_sim = sim
-    return c
+    return dataclasses.replace(ctx, nominal_sim=sim)
 
 
 def _on_top(r, current, chosen, ctx, replayer):
@@ -55,18 +53,16 @@ def _on_top(r, current, chosen, ctx, replayer):
         if set(own) & {k for c in plants for k in c.effect.overrides(c.theta)}:
             return None
         ov.update(own)
-        rows = replayer.run(ov)
-        sim, pipe = rows[:, ctx.cols], dict(replayer.pipe_fit)
+        run = replayer.run(ov)
+        rows, sim, pipe = run.rows, run.rows[:, ctx.cols], dict(run.pipe)
     else:
         rows, sim, pipe = r.rows, r.sim.copy(), r.pipe
     for c in sensors:
         j = ctx.measured.index(c.signal)
         sim[:, j] = current[:, j]
-    out = fit.Result(r.id, r.component, r.kind, True, theta=list(r.theta), stderr=list(r.stderr),
-                     train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
-                     evaluations=1, sim=sim, rows=rows, effect=r.effect, nominal=dict(r.nominal), pipe=pipe)
-    out.k = r.k
-    return out
+    return fit.Result(r.id, r.component, r.kind, True, theta=list(r.theta), stderr=list(r.stderr),
+                      train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
+                      evaluations=1, sim=sim, rows=rows, effect=r.effect, nominal=dict(r.nominal), pipe=pipe, k=r.k)
 
 
 def extend(best, results, twins, ctx, replayer) -> list:
@@ -85,13 +81,13 @@ def extend(best, results, twins, ctx, replayer) -> list:
                 continue
             trial.append(r2)
         base = _based_on(ctx, current)
-        verdict_mod.judge(trial, base, ctx.cost(current, ctx.train), ctx.cost(current, ctx.held))
+        trial = verdict_mod.judge(trial, base, ctx.cost(current, ctx.train), ctx.cost(current, ctx.held))
         acc = sorted((r for r in trial if r.accepted), key=lambda r: -r.held_gain)
         if not acc:
             break
         nxt = acc[0]
         if nxt.kind == "simulate" and nxt.rows is not None:
-            chosen = _refit_sensors(chosen, nxt, ctx)
+            chosen, nxt = _refit_sensors(chosen, nxt, ctx)
         chosen.append(nxt)
         tried.add(nxt.id)
         current = nxt.sim
@@ -100,8 +96,8 @@ def extend(best, results, twins, ctx, replayer) -> list:
 
 def _refit_sensors(chosen, plant, ctx) -> list:
     """The chosen sensor effects fitted again on the reading of the model with `plant` joined
-    (its replay's measured columns), each on its own signal; `plant.sim` takes their columns.
-    -> chosen, the sensor effects replaced by their re-fitted copies."""
+    (its replay's measured columns), each on its own signal. -> (chosen with the sensor effects
+    replaced by their re-fitted copies, plant with their columns in its sim)."""
     sim = plant.rows[:, ctx.cols].copy()
     out = []
     for c in chosen:
@@ -114,12 +110,8 @@ def _refit_sensors(chosen, plant, ctx) -> list:
             continue
         j = ctx.measured.index(c.signal)
         sim[:, j] = r.sim[:, j]
-        c2 = copy.copy(c)
-        c2.theta, c2.stderr, c2.sim = r.theta, r.stderr, sim
-        c2.refitted_with = plant.id
-        out.append(c2)
-    plant.sim = sim
-    return out
+        out.append(dataclasses.replace(c, theta=r.theta, stderr=r.stderr, sim=sim, refitted_with=plant.id))
+    return out, dataclasses.replace(plant, sim=sim)
 
 
 def final(chosen):
@@ -127,11 +119,9 @@ def final(chosen):
     holds every chosen effect (fitted again when a plant effect joined), that model's simulation,
     and the rows and pipe-sensor fits of its last plant replay (None and {}: sensor effects only,
     the heat flows are the nominal's)."""
-    f = copy.copy(chosen[0])
-    f.sim = chosen[-1].sim
     last = next((c for c in reversed(chosen) if c.kind == "simulate" and c.rows is not None), None)
-    f.rows, f.pipe = (last.rows, last.pipe) if last is not None else (None, {})
-    return f
+    return dataclasses.replace(chosen[0], sim=chosen[-1].sim, rows=last.rows if last is not None else None,
+                               pipe=last.pipe if last is not None else {})
 
 
 def public(chosen, ctx) -> list[dict]:
@@ -142,5 +132,5 @@ def public(chosen, ctx) -> list[dict]:
         out.append({"effect": r.id, "component": r.signal or r.component, "parameters": p["parameters"],
                     "summary": r.effect.summary(r.theta, ctx, r.rows),
                     "heldout_gain_over_previous": r.held_gain, "reason": r.reason,
-                    "order": i + 1, "refitted_with": getattr(r, "refitted_with", None)})
+                    "order": i + 1, "refitted_with": r.refitted_with})
     return out

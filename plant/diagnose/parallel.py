@@ -10,6 +10,7 @@ their locks might), the fits run in this process, in order; results are the same
 """
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
 import os
 import threading
@@ -22,9 +23,8 @@ _JOB: dict = {}
 
 def _fit_one(i: int):
     j = _JOB
-    r = fit.fit_simulate(j["effects"][i], j["ctx"], j["rp"], j["J0t"], j["nominal"])
-    r.effect = None
-    return r
+    return dataclasses.replace(fit.fit_simulate(j["effects"][i], j["ctx"], j["rp"], j["J0t"], j["nominal"]),
+                               effect=None)
 
 
 def default_jobs() -> int:
@@ -47,6 +47,4 @@ def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None
             out = list(pool.map(_fit_one, range(len(effects))))
     finally:
         _JOB.clear()
-    for e, r in zip(effects, out):
-        r.effect = e
-    return out
+    return [dataclasses.replace(r, effect=e) for e, r in zip(effects, out)]

@@ -16,76 +16,32 @@ bound the same way: a sample holds from the midpoint before it to the midpoint a
 """
 from __future__ import annotations
 
+import copy
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
 from . import pipe_sensor, sensor_height
+from .requirements import BOUNDARY, COMMANDS
 
-COMMANDS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set")
-# a command the recording may replace by a measured signal (with a warning)
-SUBSTITUTES = {"mixer.m_flow_set": "mixer.m_flow", "mixer.T_sup_set": "mixer.T_sup",
-               "chp.y_set": "chp.on"}
-BOUNDARY = ("weather.T_air", "weather.E_dir", "weather.E_dif", "occupancy.presence", "household.P_el",
-            "dhw.m_flow_demand")
-NOT_COMPARED_UNITS = ("J", "h", "1", "V", "W/m2")
-
-
-def comparable() -> list[str]:
-    """Measured plant outputs a recording can be compared on (temperatures, flows, powers)."""
-    out = []
-    for s in CATALOGUE:
-        if s.causality != "output" or s.name in BOUNDARY or s.unit in NOT_COMPARED_UNITS:
-            continue
-        if s.name in ("storage.E_stored", "zone.T_set", "zone.Q_flow_gains", "zone.Q_flow_solar",
-                      "dhw.Q_flow_missing", "storage.m_flow"):
-            continue
-        out.append(s.name)
-    return out
+@dataclass(frozen=True)
+class Replay:
+    """One run of the replayed twin: rows [n_samples, n_signals] in house 1's catalogue order, and
+    the reading models fitted to it: the pipe sensors' (flow signal -> pipe_sensor fit) and the
+    storage sensors' places (sensor -> sensor_height.HeightFit)."""
+    rows: np.ndarray
+    pipe: dict = field(default_factory=dict)
+    heights: dict = field(default_factory=dict)
 
 
-def requirements() -> dict:
-    return {
-        "commands (required; replayed into the twin)": list(COMMANDS),
-        "accepted substitutes (with a warning)": {k: v for k, v in SUBSTITUTES.items()},
-        "boundary conditions (optional; taken from the twin's profiles by date, checked if present)": list(BOUNDARY),
-        "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
-        "measured signals (compared; at least one required)": comparable(),
-        "measured boundaries (optional; what each signal enables)": [
-            f"{sig} -> {what}" for sig, what in cut_mod.requirements().items()],
-    }
-
-
-def check(rec) -> list[str]:
-    """Reject a recording that lacks what replay needs; returns warnings for substitutions."""
-    warnings = []
-    missing = []
-    for c in COMMANDS:
-        if rec.has(c):
-            continue
-        sub = SUBSTITUTES.get(c)
-        if sub and rec.has(sub):
-            v = rec.data[sub].copy()
-            if c == "chp.y_set":
-                v = np.where(v > 0.5, 1.0, 0.0)
-            rec.data[c] = v
-            warnings.append(f"{c}: not recorded; replayed from {sub}" + (" (modulation 1 while on)" if c == "chp.y_set" else ""))
-        else:
-            missing.append(c)
-    measured = [s for s in comparable() if rec.has(s)]
-    if missing or not measured:
-        lines = []
-        if missing:
-            lines.append("recording lacks the command(s) replay needs: " + ", ".join(missing))
-        if not measured:
-            lines.append("recording has no measured signal to compare")
-        req = requirements()
-        lines.append("a recording for replay must contain:")
-        for k, v in req.items():
-            lines.append(f"  {k}: {', '.join(v) if isinstance(v, list) else v}")
-        raise ConfigError("\n".join(lines))
-    return warnings
+@dataclass(frozen=True)
+class PlantRoom:
+    """What the stagnant pipes cool toward [degC], and where that value comes from."""
+    T: float
+    source: str
 
 
 MIN_CALIBRATION_SAMPLES = 30  # flowing samples a subsystem calibrated alone needs in the training window
@@ -93,8 +49,13 @@ MIN_CALIBRATION_SAMPLES = 30  # flowing samples a subsystem calibrated alone nee
 
 class Replayer:
     """Drive the twin with a recording's commands (and, on a cut, its measured boundaries);
-    `run(overrides)` -> simulated rows at the samples, in house 1's catalogue order (NaN for the
-    signals the replayed plant does not simulate; a bound boundary column holds the recording)."""
+    `run(overrides)` -> a Replay: simulated rows at the samples, in house 1's catalogue order (NaN
+    for the signals the replayed plant does not simulate; a bound boundary column holds the
+    recording), with the sensor reading models fitted to it.
+
+    A calibration never changes a replayer: it returns values, and `with_calibration` gives the
+    replayer every later run uses (base overrides, the instances calibrated alone, the radiator's
+    element count, the end of the training window)."""
 
     def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True, require_cut: bool = False):
         self.rec = rec
@@ -120,24 +81,36 @@ class Replayer:
                                  "-> return)" if self.radiator else ""))
         self._checked = False
         self._cache: tuple | None = None
-        # re-fitted nominal parameters (calibration.refit_nominal): applied to every run; a run's own
-        # overrides take precedence over them
+        # calibrated values (with_calibration): applied to every run; a run's own overrides take
+        # precedence over them
         self.base: dict = {}
         # where the lab's storage sensors and ports are (columns file): every run starts from them
         self.lab = {**(rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}), **self._lab_ports()}
-        # the end of the training window (diagnose sets it): the pipe sensors' cooling time
-        # models are fitted up to it (pipe_sensor.py); pipe_fit holds the last run's
+        # the end of the training window: the pipe sensors' cooling time models and the storage
+        # sensors' places are fitted up to it (pipe_sensor.py, sensor_height.py)
         self.t_train: float | None = None
-        self.pipe_fit: dict = {}
-        # the storage sensors' places within their tolerance (sensor_height.py), the last run's
-        self.height_fit: dict = {}
         # the radiator alone's element count and the instances calibrated on their own subsystem
         # (calibrate_radiator): the nominal re-fit leaves those alone
         self.radiator_elements = 5
-        self.calibrated: set = set()
+        self.calibrated: frozenset = frozenset()
         self._layout()
-        self._T_room, self._T_room_from = self._plant_room()
-        self._tank_heights = self.tank_heights()
+        self.room = self._plant_room()
+        self.heights = self.tank_heights()
+
+    def with_calibration(self, base: dict | None = None, calibrated=(), radiator_elements: int | None = None,
+                         t_train: float | None = None) -> "Replayer":
+        """A replayer like this one whose runs start from `base` on top of this one's, with the
+        instances `calibrated` alone added (and the radiator's element count, the end of the
+        training window, where given)."""
+        out = copy.copy(self)
+        out.base = {**self.base, **(base or {})}
+        out.calibrated = self.calibrated | frozenset(calibrated)
+        if radiator_elements is not None:
+            out.radiator_elements = radiator_elements
+        if t_train is not None:
+            out.t_train = t_train
+        out._cache = None
+        return out
 
     def _layout(self) -> None:
         from ..compiler import catalogue_of
@@ -192,18 +165,18 @@ class Replayer:
         return {i.name: float(i.params.height) for i in load(self.plant_name).instances.values()
                 if i.kind == "storage" and hasattr(i.params, "height")}
 
-    def _plant_room(self) -> tuple:
+    def _plant_room(self) -> PlantRoom:
         """(what the stagnant pipes cool toward, where it comes from): read off the recording's
         long standstills (pipe_sensor.plant_room), else the replayed house's storage.T_env."""
         from ..declaration import load
 
         room = pipe_sensor.plant_room(self.rec)
         if room is not None:
-            return room, "recording (pipes after 6 h of standstill)"
+            return PlantRoom(room, "recording (pipes after 6 h of standstill)")
         inst = load(self.plant_name).instances.get("storage")
         if inst is not None and hasattr(inst.params, "T_env"):
-            return float(inst.params.T_env), "house file (storage.T_env)"
-        return pipe_sensor.T_PLANT_ROOM_DEFAULT, "default"
+            return PlantRoom(float(inst.params.T_env), "house file (storage.T_env)")
+        return PlantRoom(pipe_sensor.T_PLANT_ROOM_DEFAULT, "default")
 
     def instances(self) -> set:
         """Instances a run's overrides may address: the replayed plant's, and the mixing
@@ -249,8 +222,9 @@ class Replayer:
         self._cache = (key, rows)
         return rows
 
-    def run(self, overrides: dict | None = None, until: float | None = None) -> np.ndarray:
-        """Rows [n_samples, n_signals] (house 1's catalogue order) at the recording's sample times."""
+    def run(self, overrides: dict | None = None, until: float | None = None) -> Replay:
+        """The twin replayed at the recording's sample times (up to `until`), from the base
+        overrides and `overrides` on top."""
         ov = {**self.lab, **self.base, **(overrides or {})}
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         plant_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] not in self.removed}
@@ -274,12 +248,11 @@ class Replayer:
                 out[:, CATALOGUE.index(sig)] = v
         cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
-        self.pipe_fit = pipe_sensor.apply(self.rec, out, cols, n, self._T_room,
-                                          t_fit if self.t_train is not None else None)
-        self.height_fit = sensor_height.apply(self.rec, out, cols, n, self._tank_heights,
-                                              t_fit if self.t_train is not None else None)
+        t_fit = t_fit if self.t_train is not None else None
+        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit)
+        heights = sensor_height.apply(self.rec, out, cols, n, self.heights, t_fit)
         self._checked = True
-        return out
+        return Replay(out, pipe, heights)
 
     def circuit_flowing(self, settled: bool = False) -> np.ndarray:
         """The samples at which the heating circuit flows (settled: and flowed the sample before,
@@ -301,7 +274,8 @@ class Replayer:
 
     def calibrate_radiator(self, train: np.ndarray) -> dict | None:
         """Calibrate the radiator replayed alone on the recorded return over the training samples
-        at which the circuit flows (cut.calibrate_radiator); later runs use it. -> report entry."""
+        at which the circuit flows (cut.calibrate_radiator). -> report entry ({calibrated, values,
+        elements, ...}; with_calibration applies it) or None without a radiator alone."""
         if not self.radiator:
             return None
         mask, skipped = self._circuit_training(
@@ -310,37 +284,29 @@ class Replayer:
             "elements, and the nominal re-fit its rating")
         if skipped:
             return {**skipped, "elements": self.radiator_elements}
-        cal = cut_mod.calibrate_radiator(self.rec, self.house_name, mask)
-        cal["calibrated"] = True
-        self.radiator_elements = cal["elements"]
-        self.base.update(cal["values"])
-        self.calibrated.add("radiator")
-        return cal
+        return {**cut_mod.calibrate_radiator(self.rec, self.house_name, mask), "calibrated": True}
 
     def calibrate_mixer(self, train: np.ndarray) -> dict | None:
         """Calibrate the mixing station replayed alone on the recorded supply after mixing over
-        the training samples at which the circuit flows (cut.calibrate_mixer); later runs use it.
-        -> report entry."""
+        the training samples at which the circuit flows (cut.calibrate_mixer). -> report entry
+        ({calibrated, values, ...}) or None without a mixing station alone."""
         if not self.circuit:
             return None
         mask, skipped = self._circuit_training(train, "mixer.T_sup", "mixing station alone",
                                                "the mixing station keeps the house file's actuator and gain")
         if skipped:
             return skipped
-        cal = cut_mod.calibrate_mixer(self.rec, self.house_name, mask)
-        cal["calibrated"] = True
-        self.base.update(cal["values"])
-        return cal
+        return {**cut_mod.calibrate_mixer(self.rec, self.house_name, mask), "calibrated": True}
 
-    def radiator_return(self, values: dict, elements: int | None = None) -> np.ndarray:
+    def radiator_return(self, values: dict, elements: int | None, pipe: dict) -> np.ndarray:
         """The compared mixer.T_ret of the radiator alone with `values` (radiator overrides) and
-        `elements` (default: the calibrated count) over the whole recording, read through the
-        pipe-sensor model as the last run fitted it."""
+        `elements` (None: the calibrated count) over the whole recording, read through the
+        pipe-sensor fits `pipe` (a Replay's)."""
         ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith("radiator.")}
         y = cut_mod.replay_radiator(self.rec, self.house_name, ov, len(self.t),
                                     elements or self.radiator_elements)["mixer.T_ret"]
-        fit = self.pipe_fit.get("mixer.m_flow", pipe_sensor.AS_SIMULATED_FIT)
-        return pipe_sensor.cooled(self.t, y, self.rec.data["mixer.m_flow"], fit, self._T_room)
+        fit = pipe.get("mixer.m_flow", pipe_sensor.AS_SIMULATED_FIT)
+        return pipe_sensor.cooled(self.t, y, self.rec.data["mixer.m_flow"], fit, self.room.T)
 
     def refit_radiator(self, transform, mask: np.ndarray) -> tuple:
         """The radiator alone re-fitted with a sensor candidate's `transform` on its return

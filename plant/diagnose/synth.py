@@ -15,7 +15,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from .effects.sensor import first_order
 from .recording_io import Samples, write_csv
-from .replay import BOUNDARY, COMMANDS
+from .requirements import BOUNDARY, COMMANDS
 
 # a lab-like sensor set (the CoSES lab measures these; chp.m_flow is concealed by default)
 LAB_SIGNALS = (

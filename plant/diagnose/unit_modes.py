@@ -18,6 +18,8 @@ difference in how it is run: nothing is masked, and the report says so.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 # unit -> (the signal whose recorded value says it runs, the threshold in its unit)
@@ -55,14 +57,17 @@ def identify(rec, rows: np.ndarray, catalogue_index) -> dict:
     return out
 
 
-def apply(ctx, modes: dict) -> None:
-    """Drop the masked samples from the scoring of each unit's own signals (ctx.ok)."""
+def apply(ctx, modes: dict):
+    """The context with the masked samples dropped from the scoring of each unit's own signals
+    (ctx.ok)."""
+    ok = ctx.ok.copy()
     for unit, m in modes.items():
         if not m["masked"]:
             continue
         for j, s in enumerate(ctx.measured):
             if s.split(".", 1)[0] == unit:
-                ctx.ok[: len(m["mask"]), j] &= ~m["mask"]
+                ok[: len(m["mask"]), j] &= ~m["mask"]
+    return dataclasses.replace(ctx, ok=ok)
 
 
 def public(modes: dict) -> dict:

@@ -16,6 +16,7 @@ Selection (the held-out gate keeps the null case honest):
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -50,36 +51,42 @@ def within_calibration(r, ctx) -> str:
     return ", ".join(f"{k} = {v:.4g} within {rng[k][0]:.4g} … {rng[k][1]:.4g}" for k, v in ov.items())
 
 
-def judge(results, ctx, nominal_train, nominal_held) -> None:
+def judge(results, ctx, nominal_train, nominal_held) -> list:
+    """Each fitted candidate judged against the model whose costs are nominal_train and
+    nominal_held (ctx.nominal_sim) -> the Results with held_gain, bic, at_bound, accepted and
+    reason filled in (an unfitted one as it came)."""
     n_eff = ctx.n_eff(ctx.train)
     b0 = bic(nominal_train, n_eff, 0)
-    for r in results:
-        if not r.plausible or r.sim is None:
-            continue
-        r.held_gain = 1.0 - r.held_cost / nominal_held if nominal_held > 0 else 0.0
-        r.bic = bic(r.train_cost, n_eff, r.k)
-        free = r.effect.fitted(ctx) if r.kind == "simulate" else range(len(r.theta))
-        r.at_bound = [r.effect.params[i].name for i in free
-                      if at_bound(r.effect.params[i], r.theta[i]) and r.theta[i] != r.effect.params[i].nominal]
-        if r.local is None and r.kind == "simulate":
-            r.local = _alone(r, ctx)
-        if r.local is not None:
-            _judge_local(r, ctx, n_eff)
-            continue
-        if r.held_gain < MIN_GAIN:
-            r.reason = (f"held-out cost {r.held_cost:.4g} vs nominal {nominal_held:.4g}: "
-                        f"gain {r.held_gain * 100:.1f} % < {MIN_GAIN * 100:.0f} %; rejected")
-        elif r.bic >= b0:
-            r.reason = f"BIC {r.bic:.1f} not better than nominal {b0:.1f}; rejected"
-        elif r.at_bound:
-            r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {', '.join(r.at_bound)} ended on a bound of "
-                        "its range: the candidate absorbs a mismatch it cannot represent; rejected")
-        elif inside := within_calibration(r, ctx):
-            r.reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {inside}: a value the "
-                        "nominal re-fit may take itself, a calibration rather than missing physics; rejected")
-        else:
-            r.accepted = True
-            r.reason = f"held-out gain {r.held_gain * 100:.1f} %, BIC {r.bic:.1f} < {b0:.1f}"
+    return [_judged(r, ctx, n_eff, b0, nominal_held) if r.plausible and r.sim is not None else r
+            for r in results]
+
+
+def _judged(r, ctx, n_eff, b0, nominal_held):
+    free = r.effect.fitted(ctx) if r.kind == "simulate" else range(len(r.theta))
+    r = dataclasses.replace(
+        r, held_gain=1.0 - r.held_cost / nominal_held if nominal_held > 0 else 0.0,
+        bic=bic(r.train_cost, n_eff, r.k),
+        at_bound=[r.effect.params[i].name for i in free
+                  if at_bound(r.effect.params[i], r.theta[i]) and r.theta[i] != r.effect.params[i].nominal],
+        local=_alone(r, ctx) if r.local is None and r.kind == "simulate" else r.local)
+    if r.local is not None:
+        return _judged_local(r, n_eff)
+    accepted = False
+    if r.held_gain < MIN_GAIN:
+        reason = (f"held-out cost {r.held_cost:.4g} vs nominal {nominal_held:.4g}: "
+                  f"gain {r.held_gain * 100:.1f} % < {MIN_GAIN * 100:.0f} %; rejected")
+    elif r.bic >= b0:
+        reason = f"BIC {r.bic:.1f} not better than nominal {b0:.1f}; rejected"
+    elif r.at_bound:
+        reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {', '.join(r.at_bound)} ended on a bound of "
+                  "its range: the candidate absorbs a mismatch it cannot represent; rejected")
+    elif inside := within_calibration(r, ctx):
+        reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {inside}: a value the "
+                  "nominal re-fit may take itself, a calibration rather than missing physics; rejected")
+    else:
+        accepted = True
+        reason = f"held-out gain {r.held_gain * 100:.1f} %, BIC {r.bic:.1f} < {b0:.1f}"
+    return dataclasses.replace(r, accepted=accepted, reason=reason)
 
 
 def _alone(r, ctx) -> dict | None:
@@ -105,33 +112,35 @@ def _alone(r, ctx) -> dict | None:
             "what": f"{', '.join(ctx.measured[j] for j in idx)} (replayed alone)"}
 
 
-def _judge_local(r, ctx, n_eff) -> None:
+def _judged_local(r, n_eff):
     """A sensor candidate on an array sensor (or a plant candidate on a subsystem replayed alone,
-    _alone): accepted when the sensor's held-out residual relative to its neighbours is a mismatch (RMS above 0.3 x scale + 3 noise sigma, as
-    locate.mismatched_signals) and the effect removes >= LOCAL_GAIN of it, with a better BIC on
-    that residual and its parameter inside its range."""
+    _alone): accepted when the sensor's held-out residual relative to its neighbours is a
+    mismatch (above its limit, Context.limit, as locate.mismatched_signals) and the effect removes
+    >= LOCAL_GAIN of it, with a better BIC on that residual and its parameter inside its range."""
     d = r.local
-    r.held_gain = d["gain"]
     b0 = bic(d["heldout_rms_before"] ** 2, n_eff, 0)
-    r.bic = bic(d["heldout_rms_after"] ** 2, n_eff, r.k)
+    r = dataclasses.replace(r, held_gain=d["gain"], bic=bic(d["heldout_rms_after"] ** 2, n_eff, r.k))
     what = d.get("what") or f"{r.signal} relative to {', '.join(d['neighbours'])}"
+    accepted = False
     if d["heldout_rms_before"] <= d["limit"]:
-        r.reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
-                    "no sensor-own mismatch; rejected")
+        reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
+                  "no sensor-own mismatch; rejected")
     elif d["gain"] < LOCAL_GAIN:
-        r.reason = f"{what}: removes {d['gain'] * 100:.0f} % < {LOCAL_GAIN * 100:.0f} % of its residual; rejected"
+        reason = f"{what}: removes {d['gain'] * 100:.0f} % < {LOCAL_GAIN * 100:.0f} % of its residual; rejected"
     elif r.bic >= b0:
-        r.reason = f"{what}: BIC {r.bic:.1f} not better than {b0:.1f}; rejected"
+        reason = f"{what}: BIC {r.bic:.1f} not better than {b0:.1f}; rejected"
     elif r.at_bound:
-        r.reason = f"{what}: {', '.join(r.at_bound)} ended on a bound of its range; rejected"
+        reason = f"{what}: {', '.join(r.at_bound)} ended on a bound of its range; rejected"
     else:
-        r.accepted = True
-        r.reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} -> {d['heldout_rms_after']:.3g} "
-                    f"(gain {d['gain'] * 100:.0f} %), BIC {r.bic:.1f} < {b0:.1f}")
+        accepted = True
+        reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} -> {d['heldout_rms_after']:.3g} "
+                  f"(gain {d['gain'] * 100:.0f} %), BIC {r.bic:.1f} < {b0:.1f}")
+    return dataclasses.replace(r, accepted=accepted, reason=reason)
 
 
 def select(results, ctx, nominal_sim, affected):
-    """-> (verdict, best Result or None, indistinguishable ids, explained share).
+    """-> (verdict, best Result or None, indistinguishable ids, explained share, the results with
+    the reason a candidate is not named added to it).
 
     affected: signals with a mismatch beyond replay and sensor accuracy
     (locate.mismatched_signals). Without any such signal there is nothing to explain:
@@ -151,27 +160,24 @@ def select(results, ctx, nominal_sim, affected):
     # neighbours, a plant candidate's on the whole cost
     acc = sorted([r for r in results if r.accepted], key=lambda r: -r.held_gain)
     if not affected:
-        return "no_missing_physics", None, [], 0.0
+        return "no_missing_physics", None, [], 0.0, results
     beyond = beyond_tolerance(ctx, nominal_sim, ctx.held)
     unexplained = "unexplained_mismatch" if beyond else "no_missing_physics"
     if not acc:
-        return unexplained, None, [], 0.0
+        return unexplained, None, [], 0.0, results
     # a candidate that leaves an energy or flow signal it moves outside Guideline 14's hourly
     # acceptance has not explained that signal (G14 is the calibration criterion for metered
     # energy and flow, beyond_tolerance): it is not named; the next accepted one is tried
-    first = acc[0]
     idx_aff = [ctx.measured.index(s) for s in affected]
-    named = []
-    for r in acc:
-        left = g14_left(ctx, nominal_sim, r, idx_aff)
-        if left:
-            r.reason = (r.reason or "") + f"; leaves {', '.join(left)} outside Guideline 14: not named"
-        else:
-            named.append(r)
-    acc = named
+    left = {r.id: g14_left(ctx, nominal_sim, r, idx_aff) for r in acc}
+    results = [dataclasses.replace(r, reason=(r.reason or "") + f"; leaves {', '.join(left[r.id])} outside "
+                                   "Guideline 14: not named") if r.accepted and left[r.id] else r for r in results]
+    first = next(r for r in results if r.id == acc[0].id)
+    acc = [r for r in results if r.accepted and not left[r.id]]
+    acc.sort(key=lambda r: -r.held_gain)
     if not acc:
         return "unexplained_mismatch", first, [], explained_share(
-            ctx, nominal_sim, first.sim, moved(ctx, nominal_sim, first.sim, idx_aff))
+            ctx, nominal_sim, first.sim, moved(ctx, nominal_sim, first.sim, idx_aff)), results
     best = acc[0]
     for r in acc[1:]:
         if r.k < best.k and r.held_gain >= acc[0].held_gain - PARSIMONY and r.local is None and best.local is None:
@@ -203,8 +209,8 @@ def select(results, ctx, nominal_sim, affected):
         if r.held_cost <= 1.25 * best.held_cost + 0.02 and d <= max(best.held_cost, 0.02):
             twins.append(r.id)
     if explained < EXPLAIN and beyond_tolerance(ctx, best.sim, ctx.held):
-        return "unexplained_mismatch", best, twins, explained
-    return "missing_physics", best, twins, explained
+        return "unexplained_mismatch", best, twins, explained, results
+    return "missing_physics", best, twins, explained, results
 
 
 MOVED = 0.10
@@ -216,9 +222,7 @@ def g14_left(ctx, nominal_sim, r, idx_aff) -> list:
     locate.within_accuracy) on the held-out window after its fit."""
     from .locate import ashrae_hourly, within_accuracy
 
-    idx = [j for j in moved(ctx, nominal_sim, r.sim, idx_aff)
-           if abs(ctx.per_signal_mse(r.sim, ctx.held)[j] - ctx.per_signal_mse(nominal_sim, ctx.held)[j])
-           >= MOVED * max(ctx.per_signal_mse(nominal_sim, ctx.held)[j], 1e-12)]
+    idx = residual_changed(ctx, nominal_sim, r.sim, idx_aff)
     if not idx:
         return []
     g = ashrae_hourly(ctx, r.sim, ctx.held)
@@ -226,12 +230,18 @@ def g14_left(ctx, nominal_sim, r, idx_aff) -> list:
             and not within_accuracy(ctx, ctx.measured[j], g[ctx.measured[j]])]
 
 
-def moved(ctx, nominal_sim, sim, idx) -> list:
-    """The signals of idx whose held-out MSE the fitted simulation changes by >= MOVED."""
+def residual_changed(ctx, nominal_sim, sim, idx) -> list:
+    """The signals of idx whose held-out MSE the fitted simulation changes by >= MOVED (relative):
+    the mismatched signals a candidate answers for. (locate.moved_signals is the other question:
+    which signals a named effect acts on beyond the mismatch limit, for the report.)"""
     mse0 = ctx.per_signal_mse(nominal_sim, ctx.held)
     mse1 = ctx.per_signal_mse(sim, ctx.held)
-    out = [j for j in idx if abs(mse1[j] - mse0[j]) >= MOVED * max(mse0[j], 1e-12)]
-    return out or list(idx)
+    return [j for j in idx if abs(mse1[j] - mse0[j]) >= MOVED * max(mse0[j], 1e-12)]
+
+
+def moved(ctx, nominal_sim, sim, idx) -> list:
+    """residual_changed, or all of idx when the candidate changes none of them by MOVED."""
+    return residual_changed(ctx, nominal_sim, sim, idx) or list(idx)
 
 
 def explained_share(ctx, nominal_sim, sim, idx) -> float:

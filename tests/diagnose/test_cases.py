@@ -6,6 +6,8 @@ estimator recovers a knob the twin itself injected (synthetic idle flow).
 1.5-day recordings, generated once per session (~2 s each). Full size with the confusion table:
 benchmarks/diagnose_cases.py.
 """
+import dataclasses
+
 import pytest
 
 from plant.diagnose import calibration, diagnose, fit, recording_io, synth, verdict
@@ -240,11 +242,11 @@ def test_a_candidate_within_the_nominal_refit_range_is_a_calibration_not_missing
     effect = {e.id: e for e in catalogue()}
     heat = fit.Result("heat_loss", "storage", "simulate", True, theta=[20.2], effect=effect["heat_loss"])
     assert verdict.within_calibration(heat, ctx) == "storage.UA_loss = 20.2 within 17 … 23"
-    heat.theta = [45.0]
+    heat = dataclasses.replace(heat, theta=[45.0])
     assert verdict.within_calibration(heat, ctx) == ""
     pipes = fit.Result("pipe_heat_loss", "switch", "simulate", True, theta=[2.0], effect=effect["pipe_heat_loss"])
     assert "return_header.UA_loss = 2 within 0 … 3" in verdict.within_calibration(pipes, ctx)
-    pipes.theta = [8.0]
+    pipes = dataclasses.replace(pipes, theta=[8.0])
     assert verdict.within_calibration(pipes, ctx) == ""
     plume = fit.Result("storage_mixing", "storage", "simulate", True, theta=[0.12], effect=effect["storage_mixing"])
     assert verdict.within_calibration(plume, ctx) == ""        # no re-fit range given for the plume here

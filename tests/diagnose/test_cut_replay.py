@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from plant.diagnose import cut, locate, replay, synth
+from plant.diagnose import cut, locate, replay, requirements, synth
 from plant.diagnose import calibration, pipe_sensor
 from plant.diagnose.context import Context
 from plant.diagnose.pipe_sensor import scored_mask
@@ -22,7 +22,7 @@ def test_a_recording_with_the_circuit_and_the_draw_is_replayed_on_the_cut():
     rp = replay.Replayer(rec)
     assert rp.plant_name == "house1_cut_circuit" and rp.circuit
     assert {"mixer.T_sup", "storage.T_sensor_5"} <= rp.simulated and "zone.T_room" not in rp.simulated
-    rows = rp.run()
+    rows = rp.run().rows
     ctx = Context.build(rec, train_days=0.4, simulated=rp.simulated)
     assert "zone.T_room" not in ctx.measured and "dhw.m_flow_hot" not in ctx.measured
     m = locate.metrics(ctx, rows[:, ctx.cols], ctx.train | ctx.held)
@@ -40,7 +40,7 @@ def test_without_the_draw_the_whole_house_is_replayed():
 
 
 def test_requirements_say_which_cut_each_signal_enables():
-    req = replay.requirements()["measured boundaries (optional; what each signal enables)"]
+    req = requirements.requirements()["measured boundaries (optional; what each signal enables)"]
     text = "\n".join(req)
     for s in cut.CUTS[0].bindings.values():
         assert f"{s} -> cut 'circuit'" in text

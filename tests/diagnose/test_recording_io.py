@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from plant.catalogue import CATALOGUE
-from plant.diagnose import recording_io, replay, synth
+from plant.diagnose import recording_io, requirements, synth
 from plant.errors import ConfigError, DataError
 
 
@@ -79,7 +79,7 @@ def test_missing_command_rejected_with_requirements(tmp_path, rec):
     data = {k: v for k, v in rec.data.items() if k != "boiler.U_set"}
     r = recording_io.Samples("x", rec.start, rec.time, data, [], None, {})
     with pytest.raises(ConfigError, match="boiler.U_set") as exc:
-        replay.check(r)
+        requirements.check(r)
     assert "must contain" in str(exc.value)
 
 
@@ -176,7 +176,7 @@ def test_declared_port_heights_move_the_twins_ports(tmp_path, rec):
     assert any("ports at 1.467 m and 0.163 m" in n and "house file: 1.6 m and 0.03 m" in n for n in rp.notes)
     until = 6 * 3600.0
     top = CATALOGUE.index("storage.T_sensor_10")
-    a, b = plain.run(until=until)[:, top], rp.run(until=until)[:, top]
+    a, b = plain.run(until=until).rows[:, top], rp.run(until=until).rows[:, top]
     assert np.nanmax(np.abs(a - b)) > 0.5
 
 

@@ -1,5 +1,7 @@
 """A unit's own modes the twin lacks (plant/diagnose/unit_modes.py): occasional state
 differences are masked for that unit's signals only; a unit run differently is not."""
+from dataclasses import dataclass
+
 import numpy as np
 
 from plant.diagnose import unit_modes
@@ -13,10 +15,10 @@ class _Rec:
         return s in self.data
 
 
+@dataclass(frozen=True)
 class _Ctx:
-    def __init__(self, measured, n):
-        self.measured = measured
-        self.ok = np.ones((n, len(measured)), bool)
+    measured: list
+    ok: np.ndarray
 
 
 def _boiler(n, on, lockout):
@@ -37,8 +39,9 @@ def test_a_lockout_is_masked_for_the_units_own_signals_only():
     m = modes["boiler"]
     assert m["masked"] and m["samples"] == 5 and m["lab_runs_twin_not"] == 0 and m["twin_runs_lab_not"] == 5
     assert m["share_of_running"] == 5 / on.sum()
-    ctx = _Ctx(["boiler.Q_flow", "boiler.T_sup", "storage.T_sensor_5"], n)
-    unit_modes.apply(ctx, modes)
+    before = _Ctx(["boiler.Q_flow", "boiler.T_sup", "storage.T_sensor_5"], np.ones((n, 3), bool))
+    ctx = unit_modes.apply(before, modes)
+    assert before.ok.all()  # a new context; the one given is left as it was
     assert (~ctx.ok[:, 0]).sum() == 5 and (~ctx.ok[:, 1]).sum() == 5 and ctx.ok[:, 2].all()
     assert "mask" not in unit_modes.public(modes)["boiler"]
 

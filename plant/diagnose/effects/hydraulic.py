@@ -156,9 +156,9 @@ class ValveLeakage(Effect):
         return {"mixer.leak": float(theta[0])}
 
     def plausible(self, ctx):
-        rows = ctx.nominal_rows
-        if rows is None:
+        if ctx.nominal is None:
             return True, ""
+        rows = ctx.nominal.rows
         on = ctx.mode_mask("heating_on")[: len(rows)]
         closed = on & (rows[:, I_VALVE] < 0.05)
         if closed.sum() < 0.02 * len(rows):

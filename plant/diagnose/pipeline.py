@@ -1,0 +1,225 @@
+"""The diagnosis as stages, each a function of its inputs that returns an immutable value:
+
+    prepare -> calibrate -> locate_mismatch -> fit_candidates -> select -> build_report
+
+No stage changes what an earlier one returned: a calibration gives a new replayer
+(Replayer.with_calibration), the nominal replay a new context (Context.with_baseline), the unit
+modes masked another (unit_modes.apply). `diagnose` runs them in order and times each.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from ..catalogue import CATALOGUE
+from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, requirements, search, unit_modes
+from . import report as report_mod
+from . import verdict as verdict_mod
+from .context import Context
+from .effects import catalogue
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """The recording checked and framed: its context, the replayer, and what replay noted."""
+    ctx: Context
+    replayer: replay.Replayer
+    warnings: tuple
+
+
+@dataclass(frozen=True)
+class Baseline:
+    """The best nominal twin: the context judged against its replay, the calibrated replayer every
+    later run starts from, and the calibrations' report entries."""
+    ctx: Context
+    replayer: replay.Replayer
+    nominal: replay.Replay
+    refit: dict                 # calibration.refit_nominal's entry (its "params": re-fitted with candidates)
+    radiator: dict | None       # the radiator replayed alone, calibrated (Replayer.calibrate_radiator)
+    mixer: dict | None          # the mixing station replayed alone, calibrated
+    modes: dict                 # unit_modes.identify
+    warnings: tuple
+    train_cost: float
+    held_cost: float
+
+
+@dataclass(frozen=True)
+class Location:
+    """Where the nominal twin and the recording differ."""
+    affected: tuple             # mismatched signals on the held-out window
+    summary: dict               # report.json "locate"
+
+
+@dataclass(frozen=True)
+class Selection:
+    """The verdict and the model it names."""
+    results: tuple              # every candidate's fit.Result, judged (verdict.judge, verdict.select)
+    verdict: str
+    best: object
+    twins: tuple
+    explained: object
+    chosen: tuple               # the named effect and the ones joined on top of it (forward.extend)
+    final: object               # the model holding every chosen effect (None: nothing named)
+    terms: tuple                # search.search's regression terms
+
+
+def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
+    """Check the recording, choose the replayed plant (a cut where it measures enough), frame the
+    training and held-out windows."""
+    warnings = list(rec.warnings) + requirements.check(rec)
+    rp = replay.Replayer(rec, house, require_cut=require_cut)
+    ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
+    return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
+
+
+def calibrate(p: Prepared, house: str, refit_nominal: bool, log) -> Baseline:
+    """The subsystems replayed alone calibrated on their own interfaces, the unit modes the twin
+    lacks masked, then the nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds)."""
+    ctx, rp = p.ctx, p.replayer
+    radiator = rp.calibrate_radiator(ctx.train)
+    calibrated = ()
+    if radiator and radiator["calibrated"]:
+        rp = rp.with_calibration(radiator["values"], {"radiator"}, radiator["elements"])
+        calibrated = tuple(replay.cut_mod.RADIATOR_OUTPUTS)
+        log(f"radiator alone: {radiator['elements']} elements, " + ", ".join(
+            f"{k} {v:.4g}" for k, v in radiator["values"].items()) + f", return RMS {radiator['rms_K']:.3g} K")
+    mixer = rp.calibrate_mixer(ctx.train)
+    if mixer and mixer["calibrated"]:
+        rp = rp.with_calibration(mixer["values"])
+        log("mixing station alone: " + ", ".join(f"{k} {v:.4g}" for k, v in mixer["values"].items())
+            + f", supply RMS {mixer['rms_file_K']:.3g} -> {mixer['rms_K']:.3g} K")
+    first = rp.run()
+    warnings = list(p.warnings) + rp.notes + rp.boundary_check(first.rows)
+    # a unit's own modes the twin lacks (a boiler's lock-out) are not scored (unit_modes.py)
+    modes = unit_modes.identify(ctx.rec, first.rows, CATALOGUE.index)
+    ctx = unit_modes.apply(ctx, modes)
+    nref, ranges, nominal = {"parameters": [], "params": []}, {}, first
+    if refit_nominal:
+        nref = calibration.refit_nominal(ctx, rp, house)
+        rp = rp.with_calibration(nref["overrides"])
+        ranges = calibration.ranges(nref)
+        nominal = rp.run()
+        sim_file = first.rows[:, ctx.cols]
+        nref = {**nref, "train_cost_file": ctx.cost(sim_file, ctx.train),
+                "heldout_cost_file": ctx.cost(sim_file, ctx.held)}
+        if nref.get("storage_scheme"):
+            log(f"storage scheme: {nref['storage_scheme']['chosen']}")
+        log("nominal re-fit: " + ", ".join(f"{q['name']} {q['file_value']:.4g} -> {q['fitted_value']:.4g}"
+                                           for q in nref["parameters"]))
+    # the subsystems replayed alone between measured interfaces: candidates on them are judged there
+    alone = {"instances": {"mixer"}, "signals": list(replay.cut_mod.CIRCUIT_OUTPUTS)} if rp.circuit else None
+    ctx = ctx.with_baseline(nominal, alone, calibrated, ranges)
+    J0t, J0h = ctx.cost(ctx.nominal_sim, ctx.train), ctx.cost(ctx.nominal_sim, ctx.held)
+    log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "
+        f"({len(ctx.measured)} measured signals)")
+    return Baseline(ctx, rp, nominal, nref, radiator, mixer, modes, tuple(warnings), J0t, J0h)
+
+
+def locate_mismatch(b: Baseline) -> Location:
+    ctx, rp, sim0 = b.ctx, b.replayer, b.ctx.nominal_sim
+    affected = locate.mismatched_signals(ctx, sim0, ctx.held)
+    summary = {"replay": {"plant": rp.plant_name, "cut": rp.cut.name if rp.cut else None,
+                          "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit},
+               "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
+               "windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],
+               "mismatched_signals": affected}
+    return Location(tuple(affected), summary)
+
+
+def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
+    """Every candidate fitted on the training window (simulate-kind ones in parallel processes:
+    each is independent); an implausible one comes back unfitted with its reason."""
+    ctx, rp = b.ctx, b.replayer
+    results, todo = [], []
+    for e in (effects if effects is not None else catalogue()):
+        ok, why = e.plausible(ctx) if e.available else (False, e.description)
+        if not ok:
+            results.append(fit.Result(e.id, e.component, e.kind, False, why, effect=e))
+        else:
+            results.append(None)
+            todo.append((len(results) - 1, e))
+    sims = [(i, e) for i, e in todo if e.kind == "simulate"]
+    for (i, e), r in zip(sims, parallel.fit_all([e for _, e in sims], ctx, rp, b.train_cost,
+                                                b.refit["params"], jobs)):
+        results[i] = r
+    for i, e in todo:
+        if e.kind != "simulate":
+            results[i] = fit.fit_signal(e, ctx, ctx.nominal_sim, rp)
+    for i, e in todo:
+        r = results[i]
+        log(f"  {e.id:<20} {r.signal or '':<24} theta {r.theta[0] if r.theta else float('nan'):.4g}  "
+            f"held-out cost {r.held_cost:.4g}")
+    return tuple(results)
+
+
+def select(b: Baseline, loc: Location, results: tuple) -> Selection:
+    """Judge the candidates on the held-out window, reach the verdict, add further effects on top
+    of the named one (forward.py), and search regression terms for what stays unexplained."""
+    ctx = b.ctx
+    judged = verdict_mod.judge(results, ctx, b.train_cost, b.held_cost)
+    verdict, best, twins, explained, judged = verdict_mod.select(judged, ctx, ctx.nominal_sim, list(loc.affected))
+    chosen = forward.extend(best, judged, twins, ctx, b.replayer) if verdict == "missing_physics" else []
+    # the report's "after": the model that holds every chosen effect (the best alone when only it)
+    final = forward.final(chosen) if len(chosen) > 1 else best
+    terms = search.search(ctx, b.nominal.rows, list(loc.affected)) if verdict != "no_missing_physics" else []
+    return Selection(tuple(judged), verdict, best, tuple(twins), explained, tuple(chosen), final, tuple(terms))
+
+
+def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
+    ctx, rp = b.ctx, b.replayer
+    rep = report_mod.build(ctx, house, b.nominal.rows, ctx.nominal_sim, list(s.results), s.verdict, s.final,
+                           list(s.twins), s.explained, loc.summary, list(s.terms), list(b.warnings))
+    rep["nominal_refit"] = report_mod.nominal_refit(b.refit, ctx, ctx.nominal_sim, s.best)
+    rep["effects"] = forward.public(list(s.chosen), ctx)
+    if len(s.chosen) > 1:
+        rep["finding"] += "; together with " + ", ".join(
+            f"{r.id} ({r.effect.summary(r.theta, ctx, r.rows)}{' on ' + r.signal if r.signal else ''}, held-out "
+            f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in s.chosen[1:])
+    rep["radiator_calibration"] = b.radiator
+    rep["mixer_calibration"] = b.mixer
+    # the nominal twin's fits, and the named model's where a plant effect changed its flows
+    named = s.final.pipe if s.final is not None else {}
+    rep["pipe_sensors"] = {flow: {**pipe_sensor.public(f), "T_plant_room_degC": rp.room.T,
+                                  "T_plant_room_from": rp.room.source,
+                                  "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
+                           for flow, f in b.nominal.pipe.items()}
+    rep["unit_modes"] = unit_modes.public(b.modes)
+    rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]])
+                                    for sig, h in b.nominal.heights.items()}
+    report_mod.flag_bounds(rep, list(s.results))
+    return rep
+
+
+def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effects=None,
+             plots: bool = True, log=print, refit_nominal: bool = True, jobs: int | None = None,
+             require_cut: bool = False) -> dict:
+    """The diagnosis of recording `rec` against `house` -> report.json's content (written to `out`
+    with the plots when given). jobs: processes for the candidate fits (default: the CPUs this
+    process may use); require_cut: refuse a recording that allows no cut (cut.select)."""
+    timing = {}
+    t0 = time.perf_counter()
+    base = calibrate(prepare(rec, house, train_days, require_cut), house, refit_nominal, log)
+    timing["replay_nominal"] = time.perf_counter() - t0
+    t = time.perf_counter()
+    loc = locate_mismatch(base)
+    timing["locate"] = time.perf_counter() - t
+    t = time.perf_counter()
+    results = fit_candidates(base, effects, jobs, log)
+    timing["fit"] = time.perf_counter() - t
+    t = time.perf_counter()
+    sel = select(base, loc, results)
+    timing["select"] = time.perf_counter() - t
+    t = time.perf_counter()
+    rep = build_report(base, loc, sel, house)
+    if out is not None:
+        report_mod.write(rep, out, base.ctx, base.nominal.rows, sel.final, plots=plots)
+    timing["report"] = time.perf_counter() - t
+    timing["total"] = time.perf_counter() - t0
+    rep["timing_s"] = timing
+    if out is not None:
+        report_mod.write_json(rep, out)
+    return rep
+
+
+__all__ = ["diagnose", "prepare", "calibrate", "locate_mismatch", "fit_candidates", "select", "build_report",
+           "Prepared", "Baseline", "Location", "Selection"]
