@@ -43,6 +43,8 @@ class BenchChannel:
     wiring: Any
     sent: dict[str, float] = field(default_factory=dict)
     origin: dict[str, float] | None = None     # cumulative set-points at the first exchange
+    failed_at: float | None = None             # wall time of the last failed exchange
+    failure: str = ""
 
 
 @dataclass
@@ -58,6 +60,8 @@ class PhilOptions:
     retries: int = 1
     stop_file: str | Path | None = None
     warmup_s: float = 600.0           # simulated s before the run proper: benches and house settle
+    retry_s: float = 1.0              # a bench whose exchange failed is tried again after this (wall s);
+                                      # meanwhile its measurements are held, the others keep their pace
     served_age_s: float = 2.0         # served benches: a measurement not written this long (wall) is silent
     start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
                                       # the house gets there unpaced on ideal benches
@@ -186,12 +190,19 @@ class PhilLoop:
                 ch.origin = {k: wanted[k] for k in ch.wiring.cumulative}
             wanted = {k: v - ch.origin.get(k, 0.0) for k, v in wanted.items()}
             ch.sent = ch.limiter.limit(wanted, dt)
-            measured, failure = None, ""
-            try:
-                measured = ch.link.exchange(ch.sent)
-            except ExchangeError as exc:
-                failure = f"{exc.kind}: {exc.detail}"
+            measured, failure, tried = None, "", False
+            if ch.failed_at is not None and time.monotonic() - ch.failed_at < self.o.retry_s:
+                failure = ch.failure       # not tried again yet: a dead bench must not stall the others
+            else:
+                tried = True
+                try:
+                    measured = ch.link.exchange(ch.sent)
+                    ch.failed_at = None
+                except ExchangeError as exc:
+                    failure = ch.failure = f"{exc.kind}: {exc.detail}"
+                    ch.failed_at = time.monotonic()
             wall = time.monotonic()
+            exchange_s = ch.link.last_exchange_s if tried else math.nan
             judged = ch.guard.judge(measured, wall, failure, getattr(ch.link, "reasons", None), ch.sent)
             for iname, j in judged.items():
                 if not j.ok:
@@ -201,13 +212,13 @@ class PhilLoop:
             if all(not math.isnan(v) for v in used.values()):
                 ch.wiring.feed(self.house, used)
             if counted:
-                self.tally.exchange(name, ch.sent, measured, judged, ch.link.last_exchange_s, dt)
+                self.tally.exchange(name, ch.sent, measured, judged, exchange_s, dt)
             row.update({f"{name}.{k}": v for k, v in ch.sent.items()})
             for k, j in judged.items():
                 row[f"{name}.{k}"] = (measured or {}).get(k, math.nan)
                 row[f"{name}.{k}.used"] = j.value
                 row[f"{name}.{k}.flag"] = 0.0 if j.ok else 1.0
-            row[f"{name}.exchange_ms"] = ch.link.last_exchange_s * 1e3
+            row[f"{name}.exchange_ms"] = exchange_s * 1e3
         return row
 
     def _record(self, row: dict[str, float], t: float) -> None:
@@ -279,6 +290,8 @@ class PhilLoop:
     def run(self) -> dict[str, Any]:
         """Run paced until the end or a stop; returns the report (also stored as report.json)."""
         self._prerun()
+        for ch in self.channels.values():
+            ch.guard.restart(time.monotonic())
         self.clock = PacedClock(self.o.speed, self.o.dt)
         self.clock.bind(self.step)
         self.clock.start()

@@ -96,6 +96,7 @@ class Tally:
             out["room"]["heat_to_room_kWh"] = L["heat_building"] / 3.6e6
         for bench, ch in self.channels.items():
             ex = np.array(self.exchange_s[bench]) * 1e3
+            ex = ex[~np.isnan(ex)]             # NaN: not tried (a failed bench waiting for its retry)
             first, last = self.meter[bench]
             bench_kWh = last - first if not math.isnan(first) else math.nan
             model_kWh = self.model_J[bench] / 3.6e6

@@ -154,6 +154,11 @@ class MeasurementGuard:
             return f"out of range ({value:g} outside {lo:g}…{hi:g} {self.bench.dmap.point(name).unit})"
         return ""
 
+    def restart(self, wall: float) -> None:
+        """The exchanges begin now (after the unpaced pre-run): no measurement is late yet."""
+        for st in self.state.values():
+            st.since_good = wall
+
     def must_stop(self, wall: float) -> str:
         """'' while running; otherwise the interface and why the run must stop."""
         for name, st in self.state.items():

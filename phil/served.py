@@ -23,17 +23,13 @@ import dataclasses
 import math
 import threading
 import time
-from typing import Any, Callable
 
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.maps import codec
-from gateway.maps.model import DeviceMap, Point
+from gateway.maps.model import Point
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from phil.benchmap import BenchMap
-
-SERVE_OFFSET = 100
-
 
 def served_address(bench: BenchMap, point: Point) -> int:
     return bench.serve_offset + point.address
@@ -148,7 +144,6 @@ class SharedServer:
         self.devices: list[Device] = []
         self.transport: ModbusTcpTransport | None = None
         self.users = 0
-        self.listeners: list[Callable[[dict[str, Any]], None]] = []
 
     @classmethod
     def at(cls, host: str, port: int) -> "SharedServer":

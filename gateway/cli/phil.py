@@ -44,6 +44,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "set-points are sent and the run stops (default: the map's stop_s)")
     p.add_argument("--timeout", type=float, default=0.5, help="Modbus request timeout [s]")
     p.add_argument("--retries", type=int, default=1, help="Modbus retries per request")
+    p.add_argument("--retry-after", type=float, default=1.0, help="s (wall) before a bench whose exchange "
+                   "failed is tried again; meanwhile its values are held and the other benches keep their pace")
     p.add_argument("--stop-file", help="the run stops (safe set-points sent) once this file exists")
     p.set_defaults(func=run)
 
@@ -80,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
     loop = PhilLoop(args.house, benches, PhilOptions(
         speed=args.speed, dt=args.step, hours=args.hours, typeday=args.typeday, record=args.record,
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
-        stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age))
+        stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age,
+        retry_s=args.retry_after))
     for name, address in loop.served.items():
         print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
               f"{loop.channels[name].map.dmap.unit_id})", flush=True)

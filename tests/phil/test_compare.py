@@ -16,7 +16,7 @@ def test_compare_a_run_with_its_benches_and_the_house_alone(tmp_path):
     servers = {n: BenchServer(n, speed=150.0).start() for n in ("space_heating", "tap_water", "solar")}
     try:
         loop = PhilLoop("house1", {n: ("127.0.0.1", s.port) for n, s in servers.items()},
-                        PhilOptions(speed=150.0, dt=2.0, hours=0.3, typeday=4, start_h=32.0, warmup_s=120.0,
+                        PhilOptions(speed=150.0, dt=2.0, hours=0.2, typeday=4, start_h=32.0, warmup_s=60.0,
                                     record=tmp_path / "run"))
         assert loop.run()["stop_reason"] == "end of run"
     finally:

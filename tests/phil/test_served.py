@@ -105,3 +105,24 @@ def test_space_heating_bench_as_plc_process_polling_the_twin(tmp_path):
     assert abs(b["heat_error_pct"]) < 0.5
     assert b["follow_rms"]["STM_HCRL_Set_degC"] < 0.5
     assert b["exchange_ms"]["p99"] < 5.0           # no bus in the step: publish and take
+
+
+def test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served(tmp_path):
+    from phil.emulator.plc import BenchPlc
+
+    loop = PhilLoop("house1", {"space_heating": BenchAddress("127.0.0.1", 0, serve=True)},
+                    PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, start_h=24.0, warmup_s=20.0,
+                                record=tmp_path / "run", served_age_s=0.3, stale_s=0.6, stop_s=1.5))
+    host, _, port = loop.served["space_heating"].rpartition(":")
+    plc = BenchPlc("space_heating", host, int(port), speed=100.0, period=0.01).start()
+    _wait_written(loop, "space_heating")
+    threading.Timer(1.5, plc.stop).start()      # the PLC falls silent
+    report = loop.run()
+    assert "space_heating." in report["stop_reason"] and "no good value" in report["stop_reason"]
+    events = list(csv.DictReader((tmp_path / "run" / "events.csv").open()))
+    silent = [e for e in events if e["kind"] == "rejected" and "silent: not written by the bench PLC" in e["reason"]]
+    assert {e["point"] for e in silent} >= {"STM_HCVLaM_degC", "SFW_HCRLbM_l_per_min"}
+    assert any(e["kind"] == "rejected" and e["reason"].startswith("stale (silent") for e in events)
+    board = loop.channels["space_heating"].link.board
+    assert board.values["set.SFW_HCRLbM_Set_l_per_min"] == 0.0 and board.values["set.STM_HCVLaM_Set_degC"] == 20.0
+    assert events[-1]["kind"] == "stop"
