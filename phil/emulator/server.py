@@ -92,14 +92,20 @@ class BenchServer:
         self.device.failing = on
 
     def _run(self) -> None:
-        """Pace the model: simulated time = wall time since start x speed, in model steps."""
+        """Pace the model: simulated time = wall time since start x speed, in model steps.
+
+        The device's tick runs after the plant lock is released: the server thread takes the
+        device's lock, then the plant's (Device.read_registers reads port.t and the signals), so
+        ticking inside the plant lock took them the other way round and could deadlock the bench
+        (its server stopped answering and accepting, and it did not stop on SIGTERM)."""
         wall0, h = time.monotonic(), self.model.h
         while not self._stop.is_set():
             target = (time.monotonic() - wall0) * self.speed
             with self.port_lock.lock:
                 while self.model.t + h <= target:
                     self.model.step(h)
-                self.device.tick(self.model.t)
+                t = self.model.t
+            self.device.tick(t)
             self._stop.wait(min(0.01, max(h / self.speed, 0.0005)))
 
     def summary(self) -> dict[str, Any]:

@@ -93,3 +93,29 @@ def test_bench_served_over_modbus_tcp_and_nan_is_judged():
         tlink.close()
     finally:
         server.stop(), tap.stop()
+
+
+def test_bench_ticks_its_device_outside_the_plant_lock():
+    """The server thread takes the device's lock, then the plant's; the pacing thread must not
+    take them the other way round (a deadlock: the bench stops answering and accepting)."""
+    server = BenchServer("space_heating", speed=200.0)
+    held: list[bool] = []
+    tick = server.device.tick
+
+    def checked_tick(t):
+        held.append(server.port_lock.lock._is_owned())
+        tick(t)
+
+    server.device.tick = checked_tick
+    server.start()
+    try:
+        link = BenchLink(server.map, "127.0.0.1", server.port)
+        for _ in range(50):
+            link.exchange({"STM_HCVLaM_Set_degC": 50.0, "SFW_HCRLbM_Set_l_per_min": 5.0, "STM_HCRL_Set_degC": 35.0})
+        link.close()
+        deadline = time.monotonic() + 10.0
+        while len(held) < 20 and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        server.stop()
+    assert len(held) >= 20 and not any(held)
