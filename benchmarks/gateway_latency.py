@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 from pymodbus.client import ModbusTcpClient
 
-from gateway.loopback import free_port, wait_port
+from gateway.loopback import build_c_harness, free_port, pin, wait_port
 
 HERE = Path(__file__).resolve().parent
 UNIT, COUNT = 5, 10  # storage_io (unit 5) maps input registers 0..9 in house 1
@@ -80,30 +80,6 @@ print("\\n".join(out))
 """
 
 CLIENTS = ("pymodbus", "C")
-
-
-def build_c(out: Path) -> dict[str, Path]:
-    """gcc + pkg-config libmodbus: the C server and client, in `out`."""
-    if shutil.which("gcc") is None or shutil.which("pkg-config") is None:
-        raise SystemExit("gateway_latency: needs gcc and pkg-config; apt-get install -y gcc pkg-config libmodbus-dev")
-    flags = subprocess.run(["pkg-config", "--cflags", "--libs", "libmodbus"], capture_output=True, text=True)
-    if flags.returncode:
-        raise SystemExit("gateway_latency: libmodbus not found by pkg-config; apt-get install -y libmodbus-dev")
-    exe = {}
-    for name in ("modbus_server", "modbus_client"):
-        exe[name] = out / name
-        subprocess.run(["gcc", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=200809L", "-Wall", "-Wextra", "-Werror",
-                        "-o", str(exe[name]), str(HERE / "c" / f"{name}.c"), *flags.stdout.split()], check=True)
-    return exe
-
-
-def pin(pid: int, cpus: set[int]) -> None:
-    """Every thread of process `pid` onto `cpus` (like `taskset -a -p`)."""
-    for tid in os.listdir(f"/proc/{pid}/task"):
-        try:
-            os.sched_setaffinity(int(tid), cpus)
-        except ProcessLookupError:  # a thread that just ended
-            pass
 
 
 def run_client(kind: str, exe: dict, targets: list[str], rounds: int, cpu: int) -> np.ndarray:
@@ -188,7 +164,7 @@ def main() -> None:
     ap.add_argument("--poll-seconds", type=float, default=20.0)
     args = ap.parse_args()
     tmp = Path(tempfile.mkdtemp(prefix="gateway_latency_"))
-    exe = build_c(tmp)
+    exe = build_c_harness(HERE / "c", tmp)
     loops = ["asyncio"] + (["uvloop"] if importlib.util.find_spec("uvloop") else [])
     if len(loops) == 1:
         print('uvloop is not installed (pip install -e ".[fast]"): the gateway runs on asyncio only')

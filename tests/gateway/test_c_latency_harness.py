@@ -1,7 +1,7 @@
-"""The C side of benchmarks/gateway_latency.py: its libmodbus server and client build and talk to the gateway."""
+"""The C side of benchmarks/gateway_latency.py (gateway/loopback.py builds it): its libmodbus server and
+client build and talk to the gateway."""
 from __future__ import annotations
 
-import importlib.util
 import os
 import shutil
 import subprocess
@@ -10,18 +10,12 @@ from pathlib import Path
 import pytest
 from pymodbus.client import ModbusTcpClient
 
+from gateway import loopback
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from tests.conftest import require_tool
 from tests.gateway.contract import build_gateway
 
 ROOT = Path(__file__).resolve().parents[2]
-
-
-def _benchmark():
-    spec = importlib.util.spec_from_file_location("gateway_latency", ROOT / "benchmarks" / "gateway_latency.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
@@ -30,8 +24,7 @@ def harness(tmp_path_factory):
     require_tool("libmodbus", "apt-get install -y pkg-config libmodbus-dev",
                  found=shutil.which("pkg-config") is not None
                  and subprocess.run(["pkg-config", "--exists", "libmodbus"]).returncode == 0)
-    bench = _benchmark()
-    return bench, bench.build_c(tmp_path_factory.mktemp("c"))
+    return loopback, loopback.build_c_harness(ROOT / "benchmarks" / "c", tmp_path_factory.mktemp("c"))
 
 
 @pytest.fixture(scope="module")
