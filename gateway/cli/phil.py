@@ -11,8 +11,7 @@ EXAMPLES = """examples:
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 60 --typeday 1 --hours 6 --record runs/phil2
   twin phil house1 --bench space_heating=serve:127.0.0.1:5040 --speed 60 --hours 1   # the PLC polls
-  twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 \
-      --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
+  twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md)
