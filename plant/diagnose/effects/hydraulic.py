@@ -1,16 +1,8 @@
 """Hydraulic candidates: flow through the idle CHP, pump coupling, valve leakage."""
 from __future__ import annotations
 
-import numpy as np
-
 from ...catalogue import CATALOGUE
 from .base import Effect, Param, register
-
-I_PRIM = CATALOGUE.index("mixer.m_flow_primary")
-I_BFLOW = CATALOGUE.index("boiler.m_flow")
-I_CFLOW = CATALOGUE.index("chp.m_flow")
-I_CMODE = CATALOGUE.index("chp.mode")
-I_VALVE = CATALOGUE.index("mixer.y_valve")
 
 
 @register
@@ -65,12 +57,12 @@ class IdleGeneratorFlow(Effect):
         if sim is None:
             return None, None, None
         n = len(sim)
-        mode = sim[:, I_CMODE]
-        sel = (self._idle_mask(ctx)[:n] & ((mode < 0.5) | (mode > 4.5)) & (sim[:, I_BFLOW] <= 0.0)
-               & (sim[:, I_PRIM] > 0.02))
+        mode = sim[:, CATALOGUE.index("chp.mode")]
+        sel = (self._idle_mask(ctx)[:n] & ((mode < 0.5) | (mode > 4.5)) & (sim[:, CATALOGUE.index("boiler.m_flow")] <= 0.0)
+               & (sim[:, CATALOGUE.index("mixer.m_flow_primary")] > 0.02))
         if sel.sum() < 10:
             return None, None, None
-        m, prim = sim[:, I_CFLOW][sel], sim[:, I_PRIM][sel]
+        m, prim = sim[:, CATALOGUE.index("chp.m_flow")][sel], sim[:, CATALOGUE.index("mixer.m_flow_primary")][sel]
         return float(m.mean()), float(m.sum() / prim.sum()), float(prim.mean())
 
     def _suction(self, theta, ctx, sim):
@@ -79,7 +71,7 @@ class IdleGeneratorFlow(Effect):
         sel = ctx.mode_mask("chp_on_boiler_on")[: len(sim)]
         if sel.sum() < 10:
             return None
-        return float(sim[:, I_CFLOW][sel].mean()), float(theta[1] * sim[:, I_BFLOW][sel].mean())
+        return float(sim[:, CATALOGUE.index("chp.m_flow")][sel].mean()), float(theta[1] * sim[:, CATALOGUE.index("boiler.m_flow")][sel].mean())
 
     def size(self, theta, ctx, sim=None):
         m, share, prim = self._flow(theta, ctx, sim)
@@ -135,7 +127,8 @@ class PumpCoupling(Effect):
         if sim is not None:
             sel = ctx.mode_mask("boiler_on")
             if sel.any():
-                txt += f" ({theta[0] * sim[:, I_BFLOW][sel].mean():.3f} kg/s while the boiler runs)"
+                flow = sim[:, CATALOGUE.index("boiler.m_flow")][sel].mean()
+                txt += f" ({theta[0] * flow:.3f} kg/s while the boiler runs)"
         return txt
 
 
@@ -160,7 +153,7 @@ class ValveLeakage(Effect):
             return True, ""
         rows = ctx.nominal.rows
         on = ctx.mode_mask("heating_on")[: len(rows)]
-        closed = on & (rows[:, I_VALVE] < 0.05)
+        closed = on & (rows[:, CATALOGUE.index("mixer.y_valve")] < 0.05)
         if closed.sum() < 0.02 * len(rows):
             return False, ("the replayed mixing valve is (almost) never closed while the pump runs, "
                            "so a seat leak cannot show")
