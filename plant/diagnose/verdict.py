@@ -186,12 +186,14 @@ def select(results, ctx, nominal_sim, affected):
         if r.k < best.k and r.held_gain >= acc[0].held_gain - PARSIMONY and r.local is None and best.local is None:
             best = r
     idx = [ctx.measured.index(s) for s in affected]
-    if best.kind == "simulate" or best.local is not None:
-        # a plant candidate acts on the subsystems it moves; a storage-sensor candidate was judged
-        # relative to its neighbours; a sensor candidate on any other signal answers for all of it
-        idx = moved(ctx, nominal_sim, best.sim, idx)
     if best.local is not None and best.kind == "signal":
+        # a sensor candidate judged on its own residual (relative to its neighbours, or on a
+        # subsystem replayed alone) answers for its sensor
         idx = [ctx.measured.index(best.signal)]
+    elif best.kind == "simulate" or best.local is not None:
+        # a plant candidate acts on the subsystems it moves; a sensor candidate on any other
+        # signal answers for all of it
+        idx = moved(ctx, nominal_sim, best.sim, idx)
     if best.local is not None and best.kind == "signal":
         # a sensor candidate judged on its own residual (relative to its neighbours, or on a
         # subsystem replayed alone) explains the share of that residual's excess over its limit
