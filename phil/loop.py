@@ -212,7 +212,7 @@ class PhilLoop:
             if all(not math.isnan(v) for v in used.values()):
                 ch.wiring.feed(self.house, used)
             if counted:
-                self.tally.exchange(name, ch.sent, measured, judged, exchange_s, dt)
+                self.tally.exchange(name, ch.sent, measured, judged, exchange_s, self.house.t)
             row.update({f"{name}.{k}": v for k, v in ch.sent.items()})
             for k, j in judged.items():
                 row[f"{name}.{k}"] = (measured or {}).get(k, math.nan)

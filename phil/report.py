@@ -9,6 +9,11 @@ bench within 0.1 %):
   * model: the heat the simulated radiator circuit took from the water the bench delivered,
     sum of m_meas cp (T_sup_meas - T_return_model) dt over the same steps (mixer.Q_flow, the
     ledger's heat in of plant/houses/house1_phil.toml).
+Both sides run on their own paced clocks: when one of them stalls (a loaded machine, a busy PLC)
+and catches up, the meter counted a different span than the model's steps did, and the heat
+differs by about the mean power times that drift. The bench's clock (T_PLC_s, read with the meter)
+says how long its meter counted: the report gives the drift and the heat error over the same span
+(the bench's heat scaled to the twin's span) beside the raw one.
 They agree when the bench returns the water at the set return (the radiator model's return) and
 delivers the flow and supply it reports: their difference is the flow-weighted return follow
 error, plus sensor noise and the exchange's timing, which average out over a run. The heat the
@@ -35,6 +40,7 @@ class Tally:
         self.failures = {b: 0 for b in channels}
         self.exchange_s = {b: [] for b in channels}
         self.meter = {b: [math.nan, math.nan] for b in channels}   # first and last good reading
+        self.spans = {b: [math.nan] * 4 for b in channels}   # twin, bench clock at those readings
         self.model_J = {b: 0.0 for b in channels}
         self.model_J_pending = {b: 0.0 for b in channels}
         self.safe_sent: dict[str, dict[str, float]] = {}
@@ -43,7 +49,8 @@ class Tally:
         self.demand = {b: [] for b, ch in channels.items() if ch.wiring.demand}   # t, dt, demand
 
     def exchange(self, bench: str, sent: dict, measured: dict | None, judged: dict,
-                 exchange_s: float, dt: float) -> None:
+                 exchange_s: float, t: float) -> None:
+        """One counted exchange at twin time t (before its step)."""
         ch = self.channels[bench]
         self.exchange_s[bench].append(exchange_s)
         if measured is None:
@@ -63,6 +70,12 @@ class Tally:
         if heat is not None and heat.ok:
             first, _ = self.meter[bench]
             self.meter[bench] = [heat.value if math.isnan(first) else first, heat.value]
+            clock = judged.get(ch.wiring.clock)
+            t_bench = clock.value if clock is not None and clock.ok else math.nan
+            spans = self.spans[bench]
+            if math.isnan(first):
+                spans[0], spans[2] = t, t_bench
+            spans[1], spans[3] = t, t_bench
             # the model's heat counts from the first good meter reading to the last one
             self.model_J[bench] += self.model_J_pending[bench]
             self.model_J_pending[bench] = 0.0
@@ -100,13 +113,21 @@ class Tally:
             first, last = self.meter[bench]
             bench_kWh = last - first if not math.isnan(first) else math.nan
             model_kWh = self.model_J[bench] / 3.6e6
+            t0, t1, b0, b1 = self.spans[bench]
+            twin_span, bench_span = t1 - t0, b1 - b0     # NaN without a clock reading
+            # a bench that draws a cumulative energy set-point catches up on its own: its meter is
+            # compared as it is
+            same_kWh = (bench_kWh if ch.wiring.cumulative else
+                        bench_kWh * twin_span / bench_span if bench_span > 0 else math.nan)
             out["benches"][bench] = {
                 "follow_rms": {s: (math.sqrt(self.sq[bench][s] / self.n_follow[bench][s])
                                    if self.n_follow[bench][s] else None) for s, _ in ch.wiring.pairs},
                 "units": {s: ch.map.dmap.point(s).unit for s, _ in ch.wiring.pairs},
                 "heat_bench_kWh": bench_kWh, "heat_model_kWh": model_kWh,
-                "heat_error_pct": (100.0 * (bench_kWh - model_kWh) / model_kWh
-                                   if model_kWh > 0 and not math.isnan(bench_kWh) else None),
+                "heat_error_pct": _error_pct(bench_kWh, model_kWh),
+                "twin_span_s": twin_span, "bench_span_s": bench_span,
+                "clock_drift_s": bench_span - twin_span,
+                "heat_error_same_span_pct": _error_pct(same_kWh, model_kWh),
                 "rejected": self.rejected[bench], "failed_exchanges": self.failures[bench],
                 "setpoints_limited": dict(ch.limiter.clamped),
                 "safe_sent": self.safe_sent.get(bench),
@@ -123,6 +144,10 @@ class Tally:
         out["lateness_ms"] = {"median": float(np.median(late)) if len(late) else None,
                               "p99": float(np.percentile(late, 99)) if len(late) else None}
         return out
+
+
+def _error_pct(bench_kWh: float, model_kWh: float) -> float | None:
+    return 100.0 * (bench_kWh - model_kWh) / model_kWh if model_kWh > 0 and not math.isnan(bench_kWh) else None
 
 
 #: a shortfall: the measured flow below SHORT_SHARE of the request less SHORT_MARGIN l/min (the
@@ -188,6 +213,10 @@ def format_report(report: dict[str, Any]) -> str:
         err = b["heat_error_pct"]
         lines.append(f"    heat: bench {b['heat_bench_kWh']:.4f} kWh, model {b['heat_model_kWh']:.4f} kWh"
                      + (f" ({err:+.4f} %)" if err is not None else ""))
+        same = b["heat_error_same_span_pct"]
+        if same is not None:
+            lines.append(f"    clocks: bench counted {b['bench_span_s']:.1f} s, twin {b['twin_span_s']:.1f} s "
+                         f"(drift {b['clock_drift_s']:+.1f} s); heat over the same span {same:+.4f} %")
         lines.append(f"    rejected: {b['rejected'] or 'none'}; failed exchanges {b['failed_exchanges']}; "
                      f"exchange median {b['exchange_ms']['median']} ms, p99 {b['exchange_ms']['p99']} ms")
         for f in b.get("shortfalls", []):

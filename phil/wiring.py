@@ -5,6 +5,7 @@ map's device units from the PHIL house (plant/houses/house1_phil.toml), `feed(ho
 sets the house's live measured boundary from judged measurements, `pairs` names each set-point
 with the measurement that shows whether the bench followed it, `heat` the measurement that is
 the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it is compared with,
+`clock` the bench PLC's clock [s] read with the meter,
 `ideal(house)` (optional) what a perfect bench would measure, fed during the warm-up.
 
   space_heating  supply and flow the thermostat requests, the radiator return -> measured supply
@@ -31,6 +32,8 @@ class Wiring:
     signals: tuple[str, ...]
     #: the simulated heat flow [W] whose integral the bench's meter is compared with
     model_heat: str = ""
+    #: the bench's clock [s], read with its meter: the span the meter counted on the bench's clock
+    clock: str = "T_PLC_s"
     #: the measured flow [l/min]: temperature pairs count towards the follow error only while
     #: it is above FLOWING (a temperature of standing water says nothing about following)
     flow: str = ""

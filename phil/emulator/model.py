@@ -60,7 +60,7 @@ class BenchModel:
         self.x: dict[str, float] = {}     # true states and outputs
         self.ledger: dict[str, float] = {}
         self.readings: dict[str, float] = {}
-        self.catalogue = frozenset(self.INPUTS) | frozenset(self.READINGS)
+        self.catalogue = frozenset(self.INPUTS) | frozenset(self.READINGS) | {"clock"}
 
     # --- the PlantPort face ------------------------------------------------------------------
     def get(self, name: str) -> float:
@@ -87,6 +87,9 @@ class BenchModel:
 
     # --- sensors -------------------------------------------------------------------------------
     def sample(self) -> None:
+        # the PLC's own clock, sampled with the meters: the twin compares the heat both sides
+        # counted over the span each side's clock says it lasted (phil/report.py)
+        self.readings["clock"] = self.t
         for reading, state in self.READINGS.items():
             spec = self.sensors.get(reading, {})
             value = self.x[state] + float(spec.get("noise", 0.0)) * self.rng.standard_normal()

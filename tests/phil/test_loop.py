@@ -70,15 +70,20 @@ def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
     # measured on a shared 2-core machine (1.5 h windows): space heating -0.11 ... +0.17 %,
     # hot water 0.00 %, solar -0.15 %; at 150x real time the two paced clocks' jitter and the
     # flow meters' noise at low flows leave more than the reference's 0.1 % in some runs
-    assert abs(sh["heat_error_pct"]) < 0.3
-    assert abs(tap["heat_error_pct"]) < 1.0 and abs(solar["heat_error_pct"]) < 2.0
+    # the twin and each bench run on their own paced clocks: a stall of either leaves the meter
+    # counting a different span than the model's steps (CI once: +1.58 % raw); over the span the
+    # bench's clock says its meter counted, the error is what the following leaves
+    for b in (sh, tap, solar):
+        assert abs(b["twin_span_s"] - 3600.0) < 10.0 and abs(b["clock_drift_s"]) < 0.02 * 3600.0
+    assert abs(sh["heat_error_same_span_pct"]) < 0.3
+    assert abs(tap["heat_error_same_span_pct"]) < 1.0 and abs(solar["heat_error_same_span_pct"]) < 2.0
     assert sh["follow_rms"]["STM_HCRL_Set_degC"] < 0.5
     assert solar["follow_rms"]["STM_STVL_Set_degC"] < 1.0
     assert not any(b["rejected"] for b in report["benches"].values())
     assert sh["safe_sent"]["SFW_HCRLbM_Set_l_per_min"] == 0.0 and tap["safe_sent"]["E_DHW_Set_kWh"] == 0.0
     head, rows = _rows(tmp_path / "run")
     for column in ("space_heating.STM_HCRL_Set_degC", "tap_water.E_DHW_Set_kWh", "solar.PEH_ST_Set_kW",
-                   "solar.SFW_STVL_l_per_min.used", "dhw.T_cold", "solar.exchange_ms"):
+                   "solar.SFW_STVL_l_per_min.used", "dhw.T_cold", "solar.exchange_ms", "space_heating.T_PLC_s"):
         assert column in head
     assert len(rows) == report["steps"] + 150      # 150 warm-up steps, every step recorded
     for out in outs:

@@ -57,10 +57,12 @@ def test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements(tmp
             value = re.search(r"\[0\]:\s+(\S+)", out.stdout)
             if value:
                 read.append(float(value.group(1)))
-                mbpoll("-r", "100", "127.0.0.1", "11.5", str(read[-1]), "3.0")
+                clock = (time.monotonic() - began) * 50.0          # its own clock [s], at 50x
+                mbpoll("-r", "100", "127.0.0.1", "11.5", str(read[-1]), "3.0", f"{clock:.2f}")
             time.sleep(0.02)
 
-    assert mbpoll("-r", "100", "127.0.0.1", "11.5", "0", "0").returncode == 0
+    began = time.monotonic()
+    assert mbpoll("-r", "100", "127.0.0.1", "11.5", "0", "0", "0").returncode == 0
     refused = mbpoll("-r", "0", "127.0.0.1", "5.0")      # the set-point is not the PLC's to write
     assert refused.returncode != 0 and "Illegal data address" in refused.stderr
     threading.Thread(target=plc, daemon=True).start()
