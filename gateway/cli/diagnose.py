@@ -44,7 +44,7 @@ def run(args) -> int:
     from plant.errors import ConfigError
 
     if args.requirements:
-        load_spec(args.requirements)
+        requirements.check_house(args.requirements)
         for k, v in requirements.requirements().items():
             print(f"{k}:")
             items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
@@ -59,6 +59,7 @@ def run(args) -> int:
             raise ConfigError(f"--effects {f}: no such Python file")
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
+    requirements.check_house(args.house)
     spec = load_spec(args.house)
     rec = recording_io.load(args.recording, args.map, start=args.start, house_start=spec.start)
     for w in rec.warnings:

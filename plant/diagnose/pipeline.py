@@ -66,6 +66,7 @@ class Selection:
 def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
     """Check the recording, choose the replayed plant (a cut where it measures enough), frame the
     training and held-out windows."""
+    requirements.check_house(house)
     warnings = list(rec.warnings) + requirements.check(rec)
     rp = replay.Replayer(rec, house, require_cut=require_cut)
     ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)

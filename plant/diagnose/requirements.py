@@ -31,6 +31,34 @@ def comparable() -> list[str]:
     return out
 
 
+#: the house the diagnosis knows: its commands, modes, cuts and effects are written for it
+KNOWN_HOUSE = "house1"
+
+
+def check_house(house) -> None:
+    """Refuse a house the diagnosis cannot replay, before anything is read against house 1's
+    signals. It replays any house file that declares house 1's diagnosed instances under the
+    same names and kinds (house 1 with other parameters, sizes or sensors); the diagnosis of
+    other plants (roles declared by the kinds, cuts derived per house) is issue #28."""
+    from ..house import load_spec
+
+    spec = load_spec(house)
+    where = getattr(spec, "path", house)
+    if not hasattr(spec, "instances"):
+        raise ConfigError(f"{where}: the diagnosis replays native houses only; this house's plant is an "
+                          "FMU ([house] topology = \"fmu\"): diagnose the native house it was exported from")
+    known = load_spec(KNOWN_HOUSE).instances
+    used = {n.split(".", 1)[0] for n in (*COMMANDS, *BOUNDARY, *comparable())} & set(known)
+    missing = sorted(f"{n} ({known[n].kind})" for n in used
+                     if n not in spec.instances or spec.instances[n].kind != known[n].kind)
+    if missing:
+        raise ConfigError(
+            f"{where}: the diagnosis knows {KNOWN_HOUSE}'s plant only and this house lacks its "
+            f"diagnosed instance(s) {', '.join(missing)} (name and kind); diagnose a recording of "
+            f"{KNOWN_HOUSE} or of a house file that keeps those instances (`twin diagnose "
+            f"--requirements {KNOWN_HOUSE}` lists what a recording needs)")
+
+
 def requirements() -> dict:
     return {
         "commands (required; replayed into the twin)": list(COMMANDS),

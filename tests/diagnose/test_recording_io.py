@@ -1,4 +1,6 @@
 """Bad input is repaired with a warning or rejected with a clear message."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -89,6 +91,36 @@ def test_requirements_cli(capsys):
     assert main(["diagnose", "--requirements", "house1"]) == 0
     out = capsys.readouterr().out
     assert "chp.on" in out and "storage.T_sensor_10" in out
+
+
+def test_a_house_the_diagnosis_does_not_know_is_refused_before_its_recording_is_read(tmp_path, rec, capsys):
+    # house 2 (air-source heat pump, floor heating, no CHP): its signals would all be called
+    # unknown against house 1's catalogue; the error names the house, what it lacks and the fix
+    from gateway.cli.main import main
+    from plant.diagnose import diagnose
+
+    csv, m = _write(tmp_path, rec)
+    assert main(["diagnose", "--house", "house2", "--recording", str(csv), "--map", str(m)]) != 0
+    err = capsys.readouterr().err
+    assert "house2.toml" in err and "chp (chp)" in err and "radiator (radiator)" in err
+    assert "--requirements house1" in err and "unknown signal" not in err
+    assert main(["diagnose", "--requirements", "house3"]) != 0
+    assert "house3.toml" in capsys.readouterr().err
+    with pytest.raises(ConfigError, match="house5.toml.*dhw_pump \\(coil\\)"):
+        diagnose(rec, house="house5")
+
+
+def test_a_house_file_that_keeps_house_1s_instances_is_diagnosed(tmp_path):
+    # a lab's own copy of house 1 with another storage size and CHP: the same plant, accepted
+    from plant.house import load_spec
+
+    text = Path(load_spec("house1").path).read_text()
+    assert "P_el_max = 1900.0" in text and "volume = 0.8\n" in text
+    own = tmp_path / "our_house.toml"
+    own.write_text(text.replace("P_el_max = 1900.0", "P_el_max = 2500.0").replace("volume = 0.8\n", "volume = 1.0\n"))
+    requirements.check_house(own)
+    spec = load_spec(own)
+    assert spec.instances["storage"].params.volume == 1.0 and spec.instances["chp"].params.P_el_max == 2500.0
 
 
 def test_gateway_recording_directory_is_diagnosed(tmp_path):
@@ -217,7 +249,6 @@ def test_the_shipped_recording_with_date_time_stamps_reads_as_with_seconds(tmp_p
     same samples (the stamps' start is the mapping's), and an unreadable stamp drops its row
     with a warning."""
     from datetime import datetime, timedelta
-    from pathlib import Path
 
     src = Path(__file__).resolve().parents[2] / "profiles" / "recordings" / "concealed_idle_flow"
     lines = (src / "recording.csv").read_text().splitlines()
