@@ -3,6 +3,8 @@
 A component module holds
   * `Params`, a frozen dataclass whose fields are declared with `param(...)` (SI units, range);
   * `STATES`, the names of its state vector entries, and `initial_state(params) -> ndarray`;
+  * `P = indices(Params)` and `X = indices(STATES)`: the positions in the packed parameter vector
+    and in the state vector, derived from those declarations (never written by hand);
   * `tables()` (if it has measured data), loaded once from `plant/data/<model>/`;
   * one `@njit` kernel `step(...)` that advances its state by dt and returns its outputs.
 Kernels take and return plain floats and numpy arrays so that the house's system model can call
@@ -11,6 +13,7 @@ them from its own compiled loop (one compiled loop per topology keeps a 1 s step
 from __future__ import annotations
 
 import dataclasses
+from collections import namedtuple
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -85,7 +88,30 @@ def index_of(params_cls) -> dict[str, int]:
     return {f.name: i for i, f in enumerate(fields(params_cls))}
 
 
-__all__ = ["param", "describe", "build_params", "pack", "index_of", "dataclass", "dataclasses"]
+def indices(declaration, name: str = ""):
+    """Positions of a kind's declared names, as a frozen namespace of int constants.
+
+    `declaration` is a Params dataclass (its fields in declaration order: the order `pack()` uses)
+    or a tuple of state names (STATES): `P = indices(Params)` gives `P.P_el_max == 0`,
+    `X = indices(STATES)` gives `X.T_w == 1`. A field inserted in the middle moves every later
+    position with it, in the kernels and in the code the kinds generate alike.
+
+    The namespace is a namedtuple instance. numba freezes a module-global tuple into the compiled
+    code, so `p[P.P_el_max]` in an @njit kernel is `p[0]`: the same machine code (checked when this
+    was introduced, issue #27: identical assembly for a loop over `p[P.a]` and over `p[0]`, and the
+    same time), and `cache=True` kernels load from the cache as before. In code generated as
+    source text, interpolate the int: `f"{x}[{X.T_w}]"` gives `x_chp[1]`.
+    """
+    if dataclasses.is_dataclass(declaration):
+        names = [f.name for f in fields(declaration)]
+        name = name or f"{declaration.__name__}Index"
+    else:
+        names = list(declaration)
+        name = name or "StateIndex"
+    return namedtuple(name, names)(*range(len(names)))
+
+
+__all__ = ["param", "describe", "build_params", "pack", "index_of", "indices", "dataclass", "dataclasses"]
 
 
 @dataclass

@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
 
@@ -85,20 +85,18 @@ class Params:
     use_flow_column: bool = param(False, "1", "start-up flow from table column 3 instead of column 2 (upstream)")
 
 
-P_NOM, M_MIN, ETA_MAX, DT_SET, T_RET_MAX, T_RET_RELEASE, T_RET_MIN, T_START = range(8)
-T_STOP, P_IDLE, SLEW, T_ANTI_CYCLE, U_MIN, USE_FLOW_COLUMN = range(8, 14)
-
 STATES = ("y", "t_on", "t_off", "running", "locked", "m_last", "m_stop",
           "starts", "run_seconds", "E_fuel", "E_el", "E_heat")
-X_Y, X_TON, X_TOFF, X_RUN, X_LOCK, X_MLAST, X_MSTOP = range(7)
-X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT = range(7, 12)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 SPREAD_CAP = 1.5  # max spread in start-up/run-on, in units of dT_set
 
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(len(STATES), dtype=np.float64)
-    x[X_TOFF] = -1e9
+    x[X.t_off] = -1e9
     return x
 
 
@@ -137,71 +135,71 @@ def _cgb20(tab_P, tab_dT, tab_eff, start, cool):
 @njit(cache=True)
 def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext, T_in):
     """Advance the boiler by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
-    if T_in > p[T_RET_MAX]:
-        x[X_LOCK] = 1.0
-    elif T_in < p[T_RET_RELEASE]:
-        x[X_LOCK] = 0.0
-    req = U_set > p[U_MIN]
-    on_eff = req and x[X_LOCK] < 0.5
+    if T_in > p[P.T_ret_max]:
+        x[X.locked] = 1.0
+    elif T_in < p[P.T_ret_release]:
+        x[X.locked] = 0.0
+    req = U_set > p[P.U_min]
+    on_eff = req and x[X.locked] < 0.5
     waiting = False
-    if on_eff and x[X_RUN] < 0.5:
-        if x[X_STARTS] > 0.5 and t - x[X_TOFF] < p[T_ANTI_CYCLE]:
+    if on_eff and x[X.running] < 0.5:
+        if x[X.starts] > 0.5 and t - x[X.t_off] < p[P.t_anti_cycle]:
             waiting = True
         else:
-            x[X_RUN] = 1.0
-            x[X_TON] = t
-            x[X_STARTS] += 1.0
-    elif (not on_eff) and x[X_RUN] > 0.5:
-        x[X_RUN] = 0.0
-        x[X_TOFF] = t
-        x[X_MSTOP] = x[X_MLAST]
-    running = x[X_RUN] > 0.5
+            x[X.running] = 1.0
+            x[X.t_on] = t
+            x[X.starts] += 1.0
+    elif (not on_eff) and x[X.running] > 0.5:
+        x[X.running] = 0.0
+        x[X.t_off] = t
+        x[X.m_stop] = x[X.m_last]
+    running = x[X.running] > 0.5
     target = min(1.0, U_set / 10.0) if running else 0.0
-    lim = p[SLEW] * dt
-    x[X_Y] += min(lim, max(-lim, target - x[X_Y]))
-    m = min(1.0, max(p[M_MIN], x[X_Y]))
-    Tk = max(T_in, p[T_RET_MIN]) + 273.15
-    P_ss = interp2(Tk, m, tab_P) * p[P_NOM]
-    dT_ss = interp2(Tk, m, tab_dT) * p[DT_SET]
-    eta = interp2(Tk, m, tab_eff) * p[ETA_MAX]
+    lim = p[P.slew] * dt
+    x[X.y] += min(lim, max(-lim, target - x[X.y]))
+    m = min(1.0, max(p[P.m_min], x[X.y]))
+    Tk = max(T_in, p[P.T_ret_min]) + 273.15
+    P_ss = interp2(Tk, m, tab_P) * p[P.P_nom]
+    dT_ss = interp2(Tk, m, tab_dT) * p[P.dT_set]
+    eta = interp2(Tk, m, tab_eff) * p[P.eta_max]
     q_ss = P_ss / (CP * dT_ss)
     m_own = 0.0
     P_heat = 0.0
     P_fuel = 0.0
-    P_el = -p[P_IDLE]
+    P_el = -p[P.P_idle]
     mode = 0.0
     if running:
         P_el = 0.0
         P_fuel = P_ss / eta
-        tau = t - x[X_TON]
-        if tau < p[T_START]:
+        tau = t - x[X.t_on]
+        if tau < p[P.t_start]:
             mode = 1.0
             f = interp1(tau, tab_start[:, 0], tab_start[:, 1])
-            fq = interp1(tau, tab_start[:, 0], tab_start[:, 2]) if p[USE_FLOW_COLUMN] > 0.5 else f
+            fq = interp1(tau, tab_start[:, 0], tab_start[:, 2]) if p[P.use_flow_column] > 0.5 else f
             P_heat = f * P_ss
             m_own = fq * q_ss
         else:
             mode = 3.0
             P_heat = P_ss
             m_own = q_ss
-        x[X_MLAST] = m_own
-        x[X_RUNSEC] += dt
+        x[X.m_last] = m_own
+        x[X.run_seconds] += dt
     else:
-        tau_off = t - x[X_TOFF]
-        if x[X_STARTS] > 0.5 and tau_off < p[T_STOP]:
+        tau_off = t - x[X.t_off]
+        if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
             mode = 4.0
             P_heat = interp1(tau_off, tab_cool[:, 0], tab_cool[:, 1]) * P_ss
-            m_own = interp1(tau_off, tab_cool[:, 0], tab_cool[:, 2]) * x[X_MSTOP]
+            m_own = interp1(tau_off, tab_cool[:, 0], tab_cool[:, 2]) * x[X.m_stop]
         elif waiting:
             mode = 6.0
-        elif req and x[X_LOCK] > 0.5:
+        elif req and x[X.locked] > 0.5:
             mode = 5.0
     m_flow = max(m_own, m_ext)
-    P_heat = min(P_heat, m_flow * CP * SPREAD_CAP * p[DT_SET])
+    P_heat = min(P_heat, m_flow * CP * SPREAD_CAP * p[P.dT_set])
     T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
-    x[X_EFUEL] += P_fuel * dt
-    x[X_EEL] += P_el * dt
-    x[X_EHEAT] += P_heat * dt
+    x[X.E_fuel] += P_fuel * dt
+    x[X.E_el] += P_el * dt
+    x[X.E_heat] += P_heat * dt
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
 
 
@@ -237,12 +235,12 @@ class Kind(ComponentKind):
                f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
                f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
                f"{sig('P_el', 'W', 'electric power (- consumed)')} = {Pel}",
-               f"{sig('y', '1', 'effective modulation')} = {x}[{X_Y}]",
+               f"{sig('y', '1', 'effective modulation')} = {x}[{X.y}]",
                f"{sig('mode', '1', '0 idle, 1 start-up, 3 steady, 4 run-on, 5 locked out, 6 anti-cycle wait, 8 fault')} = {mode}",
-               f"{sig('starts', '1', 'number of burner starts')} = {x}[{X_STARTS}]",
-               f"{sig('run_hours', 'h', 'burner operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
-               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
-               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X_EFUEL}]",
+               f"{sig('starts', '1', 'number of burner starts')} = {x}[{X.starts}]",
+               f"{sig('run_hours', 'h', 'burner operating hours')} = {x}[{X.run_seconds}] / 3600.0",
+               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
+               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X.E_fuel}]",
                f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
                f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
                f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")

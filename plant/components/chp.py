@@ -65,7 +65,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
 
@@ -97,21 +97,17 @@ class Params:
     T_w0: float = param(20.0, "degC", "initial water-content temperature", 0.0, 100.0)
 
 
-# indices into the packed parameter vector (field order; checked by a test against index_of)
-P_EL_MAX, M_MIN, ETA_EL_MAX, ETA_EL_MIN, ETA_TOT_MAX, P_HEATUP, T_START_COLD, T_START_WARM = range(8)
-T_STEADY, T_AMB, T_STOP, T_SUP_SET, T_RET_MAX, T_RET_MIN, P_IDLE, SLEW = range(8, 16)
-V_WATER, M_PUMP_MAX, TAU_PUMP, INITIAL_DOWNTIME, T_W0 = range(16, 21)
-
 STATES = ("y", "T_w", "t_on", "t_off", "running", "m_pump", "m_stop", "f0", "t_start",
           "starts", "run_seconds", "E_fuel", "E_el", "E_heat")
-X_Y, X_TW, X_TON, X_TOFF, X_RUN, X_MPUMP, X_MSTOP, X_F0, X_TSTART = range(9)
-X_STARTS, X_RUNSEC, X_EFUEL, X_EEL, X_EHEAT = range(9, 14)
+# positions in the packed parameter vector and in the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(len(STATES), dtype=np.float64)
-    x[X_TW] = params.T_w0
-    x[X_TOFF] = -params.initial_downtime
+    x[X.T_w] = params.T_w0
+    x[X.t_off] = -params.initial_downtime
     return x
 
 
@@ -139,45 +135,45 @@ def _water(Tw, P, m, T_in, C, dt):
 @njit(cache=True)
 def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
     """Advance the CHP by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
-    C = CP * RHO * p[V_WATER]
-    Tw = x[X_TW]
-    on_eff = on > 0.5 and T_in < p[T_RET_MAX]
+    C = CP * RHO * p[P.V_water]
+    Tw = x[X.T_w]
+    on_eff = on > 0.5 and T_in < p[P.T_ret_max]
     # switching
-    if on_eff and x[X_RUN] < 0.5:
-        D = t - x[X_TOFF]
-        x[X_TON] = t
-        x[X_RUN] = 1.0
-        x[X_F0] = min(1.0, D / p[T_AMB])
-        x[X_TSTART] = p[T_START_COLD] if D >= p[T_AMB] else p[T_START_WARM]
-        x[X_STARTS] += 1.0
-    elif (not on_eff) and x[X_RUN] > 0.5:
-        x[X_RUN] = 0.0
-        x[X_TOFF] = t
-        x[X_MSTOP] = x[X_MPUMP]  # the pump flow of the last running step
+    if on_eff and x[X.running] < 0.5:
+        D = t - x[X.t_off]
+        x[X.t_on] = t
+        x[X.running] = 1.0
+        x[X.f0] = min(1.0, D / p[P.t_amb])
+        x[X.t_start] = p[P.t_start_cold] if D >= p[P.t_amb] else p[P.t_start_warm]
+        x[X.starts] += 1.0
+    elif (not on_eff) and x[X.running] > 0.5:
+        x[X.running] = 0.0
+        x[X.t_off] = t
+        x[X.m_stop] = x[X.m_pump]  # the pump flow of the last running step
     m_pump = 0.0
     P_el = 0.0
     P_fuel = 0.0
     P_heat = 0.0
     mode = 0.0
-    if x[X_RUN] > 0.5:
-        tau = t - x[X_TON]
-        t_start = x[X_TSTART]
+    if x[X.running] > 0.5:
+        tau = t - x[X.t_on]
+        t_start = x[X.t_start]
         target_y = 1.0 if tau < t_start else min(1.0, max(0.0, y_set))
-        dy = target_y - x[X_Y]
-        lim = p[SLEW] * dt
-        x[X_Y] += min(lim, max(-lim, dy))
-        m = min(1.0, max(p[M_MIN], x[X_Y]))
-        H = max(0.0, x[X_F0] - tau / p[T_STEADY])
-        Tk = max(T_in, p[T_RET_MIN]) + 273.15
-        eta_tot = interp2(Tk, m, tab_eff) * p[ETA_TOT_MAX] / 0.90
-        P_fuel_nom = p[P_EL_MAX] / p[ETA_EL_MAX]
+        dy = target_y - x[X.y]
+        lim = p[P.slew] * dt
+        x[X.y] += min(lim, max(-lim, dy))
+        m = min(1.0, max(p[P.m_min], x[X.y]))
+        H = max(0.0, x[X.f0] - tau / p[P.t_steady])
+        Tk = max(T_in, p[P.T_ret_min]) + 273.15
+        eta_tot = interp2(Tk, m, tab_eff) * p[P.eta_tot_max] / 0.90
+        P_fuel_nom = p[P.P_el_max] / p[P.eta_el_max]
         if tau < t_start:
             mode = 1.0
             ts = tab_start[:, 0]
-            P_el = interp1(tau, ts, tab_start[:, 1]) * p[P_EL_MAX]
+            P_el = interp1(tau, ts, tab_start[:, 1]) * p[P.P_el_max]
             P_fuel = interp1(tau, ts, tab_start[:, 4]) * P_fuel_nom
             f_q = interp1(tau, ts, tab_start[:, 3])
-            P_tab = max(0.0, f_q * P_fuel_nom * (eta_tot - p[ETA_EL_MAX]) - p[P_HEATUP] * H)
+            P_tab = max(0.0, f_q * P_fuel_nom * (eta_tot - p[P.eta_el_max]) - p[P.P_heatup] * H)
             surplus = max(0.0, P_fuel - max(P_el, 0.0) - P_tab)
             # first tabulated heat: last zero row of col 4 before the first positive one
             n = tab_start.shape[0]
@@ -191,7 +187,7 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
             T_first = tab_start[min(i0 + 1, n - 1), 5]
             if t_start <= tau0:
                 tau0 = t_start
-                T_first = p[T_SUP_SET]
+                T_first = p[P.T_sup_set]
             if tau < tau0:
                 # coolant pre-warming, no flow
                 P_pre = C * (T_first - Tw) / max(tau0 - tau, dt)
@@ -204,50 +200,50 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
                 P_heat = P_tab + P_pre
                 if P_tab > 0.0:
                     dTs = max(T_tgt - T_in, 1.0)
-                    tc = max(p[TAU_PUMP], 3.0 * dt)
+                    tc = max(p[P.tau_pump], 3.0 * dt)
                     m_ff = P_tab / (CP * dTs)
                     # only the reducing side of the correction: a content warmer than the falling
                     # table temperature is not flushed out (delivered heat stays the measured one)
                     m_pump = m_ff + min(0.0, C * (Tw - T_tgt) / (CP * dTs * tc))
-                    m_pump = min(p[M_PUMP_MAX], max(0.0, m_pump))
+                    m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
         else:
             mode = 2.0 if H > 0.0 else 3.0
-            span = 1.0 - p[M_MIN]
-            frac = (m - p[M_MIN]) / span if span > 0.0 else 1.0
-            eta_el = p[ETA_EL_MIN] + (p[ETA_EL_MAX] - p[ETA_EL_MIN]) * frac
-            P_el = p[M_MIN] * p[P_EL_MAX] + (p[P_EL_MAX] - p[M_MIN] * p[P_EL_MAX]) * frac
+            span = 1.0 - p[P.m_min]
+            frac = (m - p[P.m_min]) / span if span > 0.0 else 1.0
+            eta_el = p[P.eta_el_min] + (p[P.eta_el_max] - p[P.eta_el_min]) * frac
+            P_el = p[P.m_min] * p[P.P_el_max] + (p[P.P_el_max] - p[P.m_min] * p[P.P_el_max]) * frac
             P_fuel = P_el / eta_el
-            P_heat = max(0.0, P_fuel * (eta_tot - eta_el) - p[P_HEATUP] * H)
+            P_heat = max(0.0, P_fuel * (eta_tot - eta_el) - p[P.P_heatup] * H)
             if P_heat > 0.0:
-                T_tgt = p[T_SUP_SET]
+                T_tgt = p[P.T_sup_set]
                 dTs = max(T_tgt - T_in, 1.0)
-                tc = max(p[TAU_PUMP], 3.0 * dt)
+                tc = max(p[P.tau_pump], 3.0 * dt)
                 m_pump = P_heat / (CP * dTs) + C * (Tw - T_tgt) / (CP * dTs * tc)
-                m_pump = min(p[M_PUMP_MAX], max(0.0, m_pump))
-        x[X_RUNSEC] += dt
+                m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
+        x[X.run_seconds] += dt
     else:
-        dy = -x[X_Y]
-        lim = p[SLEW] * dt
-        x[X_Y] += min(lim, max(-lim, dy))
-        tau_off = t - x[X_TOFF]
-        if x[X_STARTS] > 0.5 and tau_off < p[T_STOP]:
+        dy = -x[X.y]
+        lim = p[P.slew] * dt
+        x[X.y] += min(lim, max(-lim, dy))
+        tau_off = t - x[X.t_off]
+        if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
             mode = 4.0
             tc_ = tab_cool[:, 0]
-            m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X_MSTOP]
+            m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X.m_stop]
             P_el = interp1(tau_off, tc_, tab_cool[:, 3])
             T_cd = interp1(tau_off, tc_, tab_cool[:, 1])
             P_heat = m_pump * CP * max(0.0, T_cd - T_in)
         else:
-            P_el = -p[P_IDLE]
+            P_el = -p[P.P_idle]
             mode = 5.0 if on > 0.5 else 0.0
     # the internal pump's own flow: what the unit's heat counter multiplies by its delta T
-    x[X_MPUMP] = m_pump
+    x[X.m_pump] = m_pump
     m_flow = max(m_pump, m_ext)
     dT, T_out = _water(Tw, P_heat, m_flow, T_in, C, dt)
-    x[X_TW] = Tw + dT
-    x[X_EFUEL] += P_fuel * dt
-    x[X_EEL] += P_el * dt
-    x[X_EHEAT] += P_heat * dt
+    x[X.T_w] = Tw + dT
+    x[X.E_fuel] += P_fuel * dt
+    x[X.E_el] += P_el * dt
+    x[X.E_heat] += P_heat * dt
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
 
 
@@ -262,7 +258,7 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def stored_energy(self, inst, x):
-        return CP * RHO * inst.params.V_water * float(x[X_TW])
+        return CP * RHO * inst.params.V_water * float(x[X.T_w])
 
     def _views(self, c, inst):
         if inst.name not in c.x_slices:
@@ -294,21 +290,21 @@ class Kind(ComponentKind):
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         T_sup = sig("T_sup", "degC", "CHP supply (outlet) temperature")
         c.emit("signals",
-               f"{T_sup} = {T} if {m} > 0.0 else {x}[{X_TW}]",
+               f"{T_sup} = {T} if {m} > 0.0 else {x}[{X.T_w}]",
                f"{sig('T_ret', 'degC', 'CHP return (inlet) temperature')} = {T_in}",
                f"{sig('m_flow', 'kg/s', 'water flow through the CHP')} = {m}",
                f"{sig('P_el', 'W', 'electric power, + produced, - consumed')} = {Pel}",
                f"{sig('Q_flow', 'W', 'heat delivered to the circuit m cp (T_sup - T_ret)')} = {m} * CP * ({T} - {T_in})",
-               f"{sig('m_flow_pump', 'kg/s', 'flow of the CHP internal pump (chp.m_flow is larger when the header forces flow through the unit)')} = {m_pump or x + '[' + str(X_MPUMP) + ']'}",
-               f"{sig('Q_flow_meter', 'W', 'the CHP own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it')} = {m_pump or x + '[' + str(X_MPUMP) + ']'} * CP * ({T_sup} - {T_in})",
+               f"{sig('m_flow_pump', 'kg/s', 'flow of the CHP internal pump (chp.m_flow is larger when the header forces flow through the unit)')} = {m_pump or x + '[' + str(X.m_pump) + ']'}",
+               f"{sig('Q_flow_meter', 'W', 'the CHP own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it')} = {m_pump or x + '[' + str(X.m_pump) + ']'} * CP * ({T_sup} - {T_in})",
                f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
-               f"{sig('y', '1', 'effective electric modulation')} = {x}[{X_Y}]",
+               f"{sig('y', '1', 'effective electric modulation')} = {x}[{X.y}]",
                f"{sig('mode', '1', '0 idle, 1 start-up, 2 warm-up, 3 steady, 4 cool-down, 5 locked out, 8 fault')} = {mode}",
-               f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
-               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
-               f"{sig('E_el', 'J', 'electric energy produced (net)')} = {x}[{X_EEL}]",
-               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
-               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X_EFUEL}]",
+               f"{sig('starts', '1', 'number of starts')} = {x}[{X.starts}]",
+               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X.run_seconds}] / 3600.0",
+               f"{sig('E_el', 'J', 'electric energy produced (net)')} = {x}[{X.E_el}]",
+               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
+               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X.E_fuel}]",
                f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
                f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
                f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")

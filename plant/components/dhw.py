@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP
 
 STATES = ()
@@ -25,7 +25,8 @@ class Params:
     T_cold: float = param(10.0, "degC", "cold-water temperature", 1, 30)
 
 
-T_SET, T_COLD = range(2)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 @njit(cache=True)
@@ -33,7 +34,7 @@ def draw(p, m_demand, T_hot):
     """Returns (m_hot from the storage, T_tap delivered, Q_missing [W] short of the set temperature)."""
     if m_demand <= 0.0:
         return 0.0, T_hot, 0.0
-    T_set, T_cold = p[T_SET], p[T_COLD]
+    T_set, T_cold = p[P.T_set], p[P.T_cold]
     if T_hot > T_set:
         m_hot = m_demand * (T_set - T_cold) / (T_hot - T_cold)
         return m_hot, T_set, 0.0
@@ -62,9 +63,9 @@ class Kind(ComponentKind):
         i_out = ports.add_outlet(inst, "hot", c.port_layer(inst, "hot", st))
         lines, m_hot = m_hot_of(p, st, i_out)
         Q_dhw = c.var("Q_dhw")
-        c.emit("draws", *lines, f"{st}_in_m[{i_in}] = {m_hot}", f"{st}_in_T[{i_in}] = {p}[{T_COLD}]",
+        c.emit("draws", *lines, f"{st}_in_m[{i_in}] = {m_hot}", f"{st}_in_T[{i_in}] = {p}[{P.T_cold}]",
                f"{st}_out_m[{i_out}] = {m_hot}")
-        c.emit("signals", f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{T_COLD}])",
+        c.emit("signals", f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{P.T_cold}])",
                f"{c.ledger_entry(inst, 'dhw')} += {Q_dhw} * h")
         return Q_dhw
 
@@ -107,15 +108,15 @@ class CoilKind(Kind):
         m, T_out, T_tap, Q, Q_miss = (c.var(v) for v in ("m_coil", "T_coil", "T_tap", "Q_dhw", "Q_miss"))
         c.emit("draws",
                f"{T_out} = {st}_coil_Tout[{k}]",  # the last step's outlet: what the valve saw
-               f"{m} = m_draw if {T_out} <= {p}[{T_SET}] else "
-               f"m_draw * ({p}[{T_SET}] - {p}[{T_COLD}]) / ({T_out} - {p}[{T_COLD}])",
-               f"{st}_coil_m[{k}] = {m}", f"{st}_coil_Tin[{k}] = {p}[{T_COLD}]", f"{st}_coil_UA[{k}] = {float(ua)!r}")
+               f"{m} = m_draw if {T_out} <= {p}[{P.T_set}] else "
+               f"m_draw * ({p}[{P.T_set}] - {p}[{P.T_cold}]) / ({T_out} - {p}[{P.T_cold}])",
+               f"{st}_coil_m[{k}] = {m}", f"{st}_coil_Tin[{k}] = {p}[{P.T_cold}]", f"{st}_coil_UA[{k}] = {float(ua)!r}")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{Q} = {m} * CP * ({st}_coil_Tout[{k}] - {p}[{T_COLD}]) if {m} > 0.0 else 0.0",
-               f"{T_tap} = ({m} * {st}_coil_Tout[{k}] + (m_draw - {m}) * {p}[{T_COLD}]) / m_draw "
+               f"{Q} = {m} * CP * ({st}_coil_Tout[{k}] - {p}[{P.T_cold}]) if {m} > 0.0 else 0.0",
+               f"{T_tap} = ({m} * {st}_coil_Tout[{k}] + (m_draw - {m}) * {p}[{P.T_cold}]) / m_draw "
                f"if m_draw > 0.0 else {st}_coil_Tout[{k}]",
-               f"{Q_miss} = max(m_draw * CP * ({p}[{T_SET}] - {p}[{T_COLD}]) - {Q}, 0.0)",
+               f"{Q_miss} = max(m_draw * CP * ({p}[{P.T_set}] - {p}[{P.T_cold}]) - {Q}, 0.0)",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
                f"{sig('m_flow_hot', 'kg/s', 'water heated through the coil')} = {m}",
                f"{sig('T_tap', 'degC', 'temperature delivered at the tap')} = {T_tap}",

@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP, RHO
 
 
@@ -68,9 +68,11 @@ class Params:
     n_stages: int = param(0, "1", "0: continuous power; n: n equal stages of P_nom/n", 0, 10)
 
 
-P_NOM, T_MAX, DT_HYSTERESIS, N_STAGES, C_LAYER = range(5)  # C_LAYER: heat capacity of its layer [J/K]
 STATES = ("thermostat", "E_el")
-X_THERMOSTAT, X_EEL = range(2)
+# positions in the packed parameters and the state vector, from the declarations
+PAR = indices(Params)
+X = indices(STATES)
+C_LAYER = len(PAR)  # appended by the kind after the packed Params: heat capacity of its layer [J/K]
 
 
 def initial_state(params) -> np.ndarray:
@@ -81,18 +83,18 @@ def initial_state(params) -> np.ndarray:
 @njit(cache=True)
 def power(x, p, on, P_set, T_layer):
     """The thermostat on the layer temperature, then the power the rod takes this step [W]."""
-    if T_layer >= p[T_MAX]:
-        x[X_THERMOSTAT] = 0.0
-    elif T_layer < p[T_MAX] - p[DT_HYSTERESIS]:
-        x[X_THERMOSTAT] = 1.0
-    if on <= 0.5 or x[X_THERMOSTAT] < 0.5:
+    if T_layer >= p[PAR.T_max]:
+        x[X.thermostat] = 0.0
+    elif T_layer < p[PAR.T_max] - p[PAR.dT_hysteresis]:
+        x[X.thermostat] = 1.0
+    if on <= 0.5 or x[X.thermostat] < 0.5:
         return 0.0
-    P = min(max(P_set, 0.0), p[P_NOM])
-    n = p[N_STAGES]
+    P = min(max(P_set, 0.0), p[PAR.P_nom])
+    n = p[PAR.n_stages]
     if n > 0.0:
-        stage = p[P_NOM] / n
+        stage = p[PAR.P_nom] / n
         P = math.floor(P / stage * (1.0 + 1e-12)) * stage  # a surplus of exactly k stages gives k
-        P = min(P, p[P_NOM])
+        P = min(P, p[PAR.P_nom])
     return P
 
 
@@ -122,18 +124,18 @@ class Kind(ComponentKind):
         on = c.signal(inst, "on", "1", "input", "relay: 1 = released (SG-ready), 0 = blocked")
         P_set = c.signal(inst, "P_set", "W", "input", "power limit when released (PV-surplus mode); "
                                                       "P_nom unless driven from outside")
-        c.write_command("control", f"{inst.name}.P_set", f"{p}[{P_NOM}]")
+        c.write_command("control", f"{inst.name}.P_set", f"{p}[{PAR.P_nom}]")
         mod = c.module(__name__)
         P = c.var("P_rod")
         c.emit("hydraulics", f"{P} = {mod}.power({x}, {p}, {on}, {P_set}, x_{st.name}[{layer}])")
         c.emit("storages", f"x_{st.name}[{layer}] += {P} * h / {p}[{C_LAYER}]")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{x}[{X_EEL}] -= {P} * h",
+               f"{x}[{X.E_el}] -= {P} * h",
                f"{sig('P_el', 'W', 'electric power (- consumed)')} = -{P}",
                f"{sig('Q_flow', 'W', 'heat into the storage layer')} = {P}",
                f"{sig('on_effective', '1', '1 while the rod heats')} = 1.0 if {P} > 0.0 else 0.0",
-               f"{sig('thermostat', '1', 'thermostat contact: 1 closed, 0 open (layer above T_max)')} = {x}[{X_THERMOSTAT}]",
-               f"{sig('E_el', 'J', 'electric energy since the start (- consumed)')} = {x}[{X_EEL}]",
+               f"{sig('thermostat', '1', 'thermostat contact: 1 closed, 0 open (layer above T_max)')} = {x}[{X.thermostat}]",
+               f"{sig('E_el', 'J', 'electric energy since the start (- consumed)')} = {x}[{X.E_el}]",
                f"{c.ledger_entry(inst, 'el')} -= {P} * h",
                f"{c.ledger_entry(inst, 'heat')} += {P} * h")

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, param
+from ..component import REQUIRED, indices, param
 from ..water import CP, RHO
 from . import radiator
 from .radiator import lmtd
@@ -60,7 +60,8 @@ class Params:
     T_init: float = param(25.0, "degC", "initial water and screed temperature", 0, 60)
 
 
-Q_NOMINAL, T_SUP_NOMINAL, T_RET_NOMINAL, T_ROOM_NOMINAL, EXPONENT, V_WATER, C_SCREED, T_INIT = range(8)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -79,11 +80,11 @@ def emission(p, T_ret, T_sup, m_flow, T_room):
     b = T_sup - T_room if m_flow > 0.0 else a
     if b < a:  # supply colder than the floor: emission from the warmer end only
         b = a
-    dT_n = lmtd(p[T_RET_NOMINAL] - p[T_ROOM_NOMINAL], p[T_SUP_NOMINAL] - p[T_ROOM_NOMINAL])
+    dT_n = lmtd(p[P.T_ret_nominal] - p[P.T_room_nominal], p[P.T_sup_nominal] - p[P.T_room_nominal])
     d = lmtd(a, b)
-    Q = p[Q_NOMINAL] * (d / dT_n) ** p[EXPONENT] if d > 0.0 else 0.0
+    Q = p[P.Q_nominal] * (d / dT_n) ** p[P.exponent] if d > 0.0 else 0.0
     if b > a:  # a trickle cannot warm the whole floor: the node's own emission plus what flows in
-        own = p[Q_NOMINAL] * (lmtd(a, a) / dT_n) ** p[EXPONENT] if a > 0.0 else 0.0
+        own = p[P.Q_nominal] * (lmtd(a, a) / dT_n) ** p[P.exponent] if a > 0.0 else 0.0
         Q = min(Q, own + m_flow * CP * (T_sup - T_ret))
     return Q
 
@@ -93,7 +94,7 @@ def step(dt, x, p, m_flow, T_sup, T_room):
     """Advance by dt; returns (T_ret leaving this step, Q emitted to the room [W])."""
     T_ret = x[0]
     Q = emission(p, T_ret, T_sup, m_flow, T_room)
-    C = CP * RHO * p[V_WATER] + p[C_SCREED]
+    C = CP * RHO * p[P.V_water] + p[P.C_screed]
     x[0] = T_ret + dt * (m_flow * CP * (T_sup - T_ret) - Q) / C
     return T_ret, Q
 

@@ -63,7 +63,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 from ..water import CP
 
 YEAR = 365.0 * 86400.0
@@ -83,18 +83,18 @@ class Params:
     dT_init: float = param(0.0, "K", "ground node below the undisturbed temperature at the start", -10.0, 20.0)
 
 
-DEPTH, T_MEAN, T_MAX_MONTH, DIFFUSIVITY, GRADIENT, C_GROUND, H_GROUND, UA, M_FLOW, DT_INIT = range(10)
-
 STATES = ("T_ground", "T_sup", "T_ret", "E", "E_ground")
-X_TG, X_TSUP, X_TRET, X_E, X_EG = range(5)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 @njit(cache=True)
 def undisturbed(p, tau):
     """Undisturbed ground temperature [degC] at the collector depth, local time tau [s]."""
-    z = p[DEPTH]
-    xi = z * math.sqrt(math.pi / (p[DIFFUSIVITY] * YEAR))
-    return (p[T_MEAN] + p[GRADIENT] * z + (p[T_MAX_MONTH] - p[T_MEAN]) * math.exp(-xi)
+    z = p[P.depth]
+    xi = z * math.sqrt(math.pi / (p[P.diffusivity] * YEAR))
+    return (p[P.T_mean] + p[P.gradient] * z + (p[P.T_max_month] - p[P.T_mean]) * math.exp(-xi)
             * math.cos(2.0 * math.pi * tau / YEAR - 2.0 * math.pi * 7.0 / 12.0 - xi))
 
 
@@ -109,8 +109,8 @@ def brine(p, T_ground, Q, pump):
     """(T_sup, T_ret) of the brine for the heat Q [W] taken from it (quasi-steady exchanger)."""
     if pump <= 0.5:
         return T_ground, T_ground
-    mc = p[M_FLOW] * CP
-    eps = 1.0 - math.exp(-p[UA] / mc)
+    mc = p[P.m_flow] * CP
+    eps = 1.0 - math.exp(-p[P.UA] / mc)
     T_ret = T_ground - Q / (eps * mc)
     return T_ret + Q / mc, T_ret
 
@@ -120,12 +120,12 @@ def step(dt, x, p, tau, Q, pump):
     """Advance by dt: the brine takes Q [W] (the heat pump's source heat) while the pump runs
     (pump > 0.5); returns (T_undisturbed, Q_ground into the node [W])."""
     T_u = undisturbed(p, tau)
-    T_g = x[X_TG]
-    Q_g = p[H_GROUND] * (T_u - T_g)
-    x[X_TG] = T_g + dt * (Q_g - Q) / p[C_GROUND]
-    x[X_TSUP], x[X_TRET] = brine(p, x[X_TG], Q, pump)  # what the heat pump sees next step
-    x[X_E] += Q * dt
-    x[X_EG] += Q_g * dt
+    T_g = x[X.T_ground]
+    Q_g = p[P.H_ground] * (T_u - T_g)
+    x[X.T_ground] = T_g + dt * (Q_g - Q) / p[P.C_ground]
+    x[X.T_sup], x[X.T_ret] = brine(p, x[X.T_ground], Q, pump)  # what the heat pump sees next step
+    x[X.E] += Q * dt
+    x[X.E_ground] += Q_g * dt
     return T_u, Q_g
 
 
@@ -153,12 +153,12 @@ class Kind(ComponentKind):
     def source_temperature(self, c, inst) -> str:
         """The brine temperature a heat pump sees at the start of the step (collector outlet)."""
         x, _ = self.views(c, inst)
-        return f"{x}[{X_TSUP}]"
+        return f"{x}[{X.T_sup}]"
 
     def brine_temperatures(self, c, inst) -> tuple[str, str]:
         """(brine into the heat pump, brine back into the collector) at the end of the step."""
         x, _ = self.views(c, inst)
-        return f"{x}[{X_TSUP}]", f"{x}[{X_TRET}]"
+        return f"{x}[{X.T_sup}]", f"{x}[{X.T_ret}]"
 
     def attach(self, c, inst, user, Q: str, pump: str) -> None:
         """A heat pump takes Q [W] from this collector while pump > 0.5 (one heat pump each)."""
@@ -178,12 +178,12 @@ class Kind(ComponentKind):
         c.emit("volumes", f"{T_u}, {Q_g} = {mod}.step(h, {x}, {p}, tau, {Q}, {pump})")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('T_ground', 'degC', 'ground-node temperature around the pipes')} = {x}[{X_TG}]",
+               f"{sig('T_ground', 'degC', 'ground-node temperature around the pipes')} = {x}[{X.T_ground}]",
                f"{sig('T_undisturbed', 'degC', 'undisturbed ground temperature at the collector depth')} = {T_u}",
-               f"{sig('T_sup', 'degC', 'brine leaving the collector (to the heat pump)')} = {x}[{X_TSUP}]",
-               f"{sig('T_ret', 'degC', 'brine entering the collector (from the heat pump)')} = {x}[{X_TRET}]",
-               f"{sig('m_flow', 'kg/s', 'brine flow')} = {p}[{M_FLOW}] if {pump} > 0.5 else 0.0",
+               f"{sig('T_sup', 'degC', 'brine leaving the collector (to the heat pump)')} = {x}[{X.T_sup}]",
+               f"{sig('T_ret', 'degC', 'brine entering the collector (from the heat pump)')} = {x}[{X.T_ret}]",
+               f"{sig('m_flow', 'kg/s', 'brine flow')} = {p}[{P.m_flow}] if {pump} > 0.5 else 0.0",
                f"{sig('Q_flow', 'W', 'heat the brine takes from the ground node')} = {Q}",
                f"{sig('Q_flow_ground', 'W', 'heat from the undisturbed ground into the ground node')} = {Q_g}",
-               f"{sig('E', 'J', 'heat delivered to the brine since the start')} = {x}[{X_E}]",
-               f"{sig('E_ground', 'J', 'heat from the undisturbed ground since the start')} = {x}[{X_EG}]")
+               f"{sig('E', 'J', 'heat delivered to the brine since the start')} = {x}[{X.E}]",
+               f"{sig('E_ground', 'J', 'heat from the undisturbed ground since the start')} = {x}[{X.E_ground}]")

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..tables import interp2, read_tables
 from ..water import CP
 
@@ -86,13 +86,11 @@ class ParamsBrine:
     P_idle: float = param(15.0, "W", "stand-by electric consumption", 0.0, 1000.0)
 
 
-A_P_HEAT_NOM, A_COP_NOM, A_P_AUX_STAGE, A_DT, A_T_RET_MAX, A_T_OUT_MIN, A_M_MIN = range(7)
-A_SLEW, A_T_START, A_T_DEFROST, A_T_DEFROST_PERIOD, A_T_DEFROST_AMB, A_P_IDLE = range(7, 13)
-B_P_HEAT_NOM, B_COP_NOM, B_P_AUX_STAGE, B_DT, B_T_RET_MAX, B_T_OUT_MIN = range(6)
-B_T_SRC_MIN, B_T_SRC_MAX, B_T_START, B_P_IDLE = range(6, 10)
-
 STATES = ("y", "t_on", "running", "starts", "run_seconds", "E_el", "E_heat", "E_src")
-X_Y, X_TON, X_RUN, X_STARTS, X_RUNSEC, X_EEL, X_EHEAT, X_ESRC = range(8)
+# positions in the packed parameters and the state vector, from the declarations
+PA = indices(ParamsAir)
+PB = indices(ParamsBrine)
+X = indices(STATES)
 
 
 def initial_state(params) -> np.ndarray:
@@ -133,46 +131,46 @@ def _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode):
     if m_flow <= 0.0:
         P_heat = 0.0
     T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
-    x[X_EEL] += P_el * dt
-    x[X_EHEAT] += P_heat * dt
-    x[X_ESRC] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
+    x[X.E_el] += P_el * dt
+    x[X.E_heat] += P_heat * dt
+    x[X.E_src] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
     return m_flow, T_out, P_el, P_heat, mode
 
 
 @njit(cache=True)
 def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m_ext, T_in):
     """Advance the CHA-10 by dt from t; returns (m_flow, T_out, P_el, P_heat, mode)."""
-    want = (on > 0.5 or aux > 0.0) and T_in < p[A_T_RET_MAX]
-    running = x[X_RUN] > 0.5
+    want = (on > 0.5 or aux > 0.0) and T_in < p[PA.T_ret_max]
+    running = x[X.running] > 0.5
     defrost = False
     if running:
-        tau = t - x[X_TON]
-        defrost = (T_amb < p[A_T_DEFROST_AMB] and tau >= p[A_T_START]
-                   and (tau % p[A_T_DEFROST_PERIOD]) >= p[A_T_DEFROST_PERIOD] - p[A_T_DEFROST])
+        tau = t - x[X.t_on]
+        defrost = (T_amb < p[PA.T_defrost] and tau >= p[PA.t_start]
+                   and (tau % p[PA.t_defrost_period]) >= p[PA.t_defrost_period] - p[PA.t_defrost])
         if not want and not defrost:
-            x[X_RUN] = 0.0
+            x[X.running] = 0.0
             running = False
     elif want:
-        x[X_RUN] = 1.0
-        x[X_TON] = t
-        x[X_STARTS] += 1.0
+        x[X.running] = 1.0
+        x[X.t_on] = t
+        x[X.starts] += 1.0
         running = True
-    P_aux = _aux_power(aux, p[A_P_AUX_STAGE])
+    P_aux = _aux_power(aux, p[PA.P_aux_stage])
     if running:
         target = 1.0 if P_aux > 0.0 else min(1.0, max(0.0, y_set))
-        if t - x[X_TON] < p[A_T_START]:
+        if t - x[X.t_on] < p[PA.t_start]:
             target = 1.0
     else:
         target = 0.0
-    lim = p[A_SLEW] * dt
-    x[X_Y] += min(lim, max(-lim, target - x[X_Y]))
+    lim = p[PA.slew] * dt
+    x[X.y] += min(lim, max(-lim, target - x[X.y]))
     m_own = 0.0
     P_heat = 0.0
-    P_el = -p[A_P_IDLE]
+    P_el = -p[PA.P_idle]
     mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
     if running:
-        x[X_RUNSEC] += dt
-        if t - x[X_TON] < p[A_T_START]:
+        x[X.run_seconds] += dt
+        if t - x[X.t_on] < p[PA.t_start]:
             mode = 1.0
             P_el = 0.0
         elif defrost:
@@ -180,12 +178,12 @@ def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m
             P_el = 0.0
         else:
             mode = 3.0
-            m = min(1.0, max(p[A_M_MIN], x[X_Y]))
-            Tk = max(p[A_T_OUT_MIN], T_in + p[A_DT]) + 273.15
+            m = min(1.0, max(p[PA.m_min], x[X.y]))
+            Tk = max(p[PA.T_out_min], T_in + p[PA.dT]) + 273.15
             Ta = T_amb + 273.15
-            Q_hp = interp2(Tk, Ta, q_amb) * interp2(Tk, m, q_mod) * p[A_P_HEAT_NOM]
-            P_hp = interp2(Tk, Ta, el_amb) * interp2(Tk, m, el_mod) * p[A_P_HEAT_NOM] / p[A_COP_NOM]
-            m_own = Q_hp / (CP * p[A_DT])
+            Q_hp = interp2(Tk, Ta, q_amb) * interp2(Tk, m, q_mod) * p[PA.P_heat_nom]
+            P_hp = interp2(Tk, Ta, el_amb) * interp2(Tk, m, el_mod) * p[PA.P_heat_nom] / p[PA.COP_nom]
+            m_own = Q_hp / (CP * p[PA.dT])
             P_heat = Q_hp + P_aux
             P_el = -(P_hp + P_aux)
     return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
@@ -197,31 +195,31 @@ def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
 
     Heat taken from the brine this step: P_heat + P_el (= compressor heat − compressor power).
     """
-    want = (on > 0.5 or aux > 0.0) and T_in < p[B_T_RET_MAX] and T_src > p[B_T_SRC_MIN]
-    if x[X_RUN] > 0.5 and not want:
-        x[X_RUN] = 0.0
-    elif x[X_RUN] < 0.5 and want:
-        x[X_RUN] = 1.0
-        x[X_TON] = t
-        x[X_STARTS] += 1.0
-    running = x[X_RUN] > 0.5
+    want = (on > 0.5 or aux > 0.0) and T_in < p[PB.T_ret_max] and T_src > p[PB.T_src_min]
+    if x[X.running] > 0.5 and not want:
+        x[X.running] = 0.0
+    elif x[X.running] < 0.5 and want:
+        x[X.running] = 1.0
+        x[X.t_on] = t
+        x[X.starts] += 1.0
+    running = x[X.running] > 0.5
     m_own = 0.0
     P_heat = 0.0
-    P_el = -p[B_P_IDLE]
+    P_el = -p[PB.P_idle]
     mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
     if running:
-        x[X_RUNSEC] += dt
-        if t - x[X_TON] < p[B_T_START]:
+        x[X.run_seconds] += dt
+        if t - x[X.t_on] < p[PB.t_start]:
             mode = 1.0
             P_el = 0.0
         else:
             mode = 3.0
-            P_aux = _aux_power(aux, p[B_P_AUX_STAGE])
-            Tk = max(p[B_T_OUT_MIN], T_in + p[B_DT]) + 273.15
-            Ts = min(p[B_T_SRC_MAX], T_src) + 273.15
-            Q_hp = interp2(Tk, Ts, q_tab) * p[B_P_HEAT_NOM]
-            P_hp = interp2(Tk, Ts, el_tab) * p[B_P_HEAT_NOM] / p[B_COP_NOM]
-            m_own = Q_hp / (CP * p[B_DT])
+            P_aux = _aux_power(aux, p[PB.P_aux_stage])
+            Tk = max(p[PB.T_out_min], T_in + p[PB.dT]) + 273.15
+            Ts = min(p[PB.T_src_max], T_src) + 273.15
+            Q_hp = interp2(Tk, Ts, q_tab) * p[PB.P_heat_nom]
+            P_hp = interp2(Tk, Ts, el_tab) * p[PB.P_heat_nom] / p[PB.COP_nom]
+            m_own = Q_hp / (CP * p[PB.dT])
             P_heat = Q_hp + P_aux
             P_el = -(P_hp + P_aux)
     return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
@@ -248,7 +246,7 @@ class AirKind(ComponentKind):
         mod = c.module(__name__)
         c.emit("hydraulics", f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_air(t, h, {x}, {p}, {tabs}, "
                              f"{on}, {y_set}, {aux}, {c.values['weather.T_air']}, {m_ext}, {T_in})")
-        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"{x}[{X_Y}]",
+        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"{x}[{X.y}]",
                       f"({Ph} + {Pel}) * h if {mode} == 3.0 else 0.0")
         return m, T
 
@@ -267,10 +265,10 @@ def _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, y, fuel):
            f"{Ph} / -{Pel} if {mode} == 3.0 and {Pel} < 0.0 else 0.0",
            f"{sig('y', '1', 'effective modulation')} = {y}",
            f"{sig('mode', '1', '0 off, 1 start delay, 3 heating, 5 blocked, 7 defrost')} = {mode}",
-           f"{sig('starts', '1', 'number of starts')} = {x}[{X_STARTS}]",
-           f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X_RUNSEC}] / 3600.0",
-           f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X_EEL}]",
-           f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X_EHEAT}]",
+           f"{sig('starts', '1', 'number of starts')} = {x}[{X.starts}]",
+           f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X.run_seconds}] / 3600.0",
+           f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X.E_el}]",
+           f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
            f"{c.ledger_entry(inst, 'fuel')} += {fuel}",
            f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
            f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
@@ -304,7 +302,7 @@ class BrineKind(ComponentKind):
                f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_brine(t, h, {x}, {p}, {tabs}, {on}, {aux}, "
                f"{T_src}, {m_ext}, {T_in})",
                f"{Q_src} = {Ph} + {Pel} if {mode} == 3.0 else 0.0")
-        coll_kind.attach(c, coll, inst, Q_src, f"{x}[{X_RUN}]")
+        coll_kind.attach(c, coll, inst, Q_src, f"{x}[{X.running}]")
         _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"1.0 if {mode} == 3.0 else 0.0", f"{Q_src} * h")
         T_brine_in, T_brine_out = coll_kind.brine_temperatures(c, coll)
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
@@ -312,5 +310,5 @@ class BrineKind(ComponentKind):
                f"{sig('T_brine_in', 'degC', 'brine entering the heat pump (from the collector)')} = {T_brine_in}",
                f"{sig('T_brine_out', 'degC', 'brine leaving the heat pump (to the collector)')} = {T_brine_out}",
                f"{sig('Q_flow_source', 'W', 'heat taken from the brine (compressor heat - compressor power)')} = {Q_src}",
-               f"{sig('E_source', 'J', 'heat taken from the brine since the start')} = {x}[{X_ESRC}]")
+               f"{sig('E_source', 'J', 'heat taken from the brine since the start')} = {x}[{X.E_src}]")
         return m, T

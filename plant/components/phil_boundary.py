@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import sun
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 from . import solar_collector as collector
 
 
@@ -54,7 +54,8 @@ class DemandParams:
     T_cold: float = param(10.0, "degC", "cold-water temperature until the bench measures it", 1, 30)
 
 
-D_T_SET, D_T_COLD = range(2)
+# positions in the packed parameter vector, from the declaration
+PD = indices(DemandParams)
 
 
 class DemandKind(ComponentKind):
@@ -70,9 +71,9 @@ class DemandKind(ComponentKind):
     def emit(self, c, inst):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         T_cold = c.signal(inst, "T_cold", "degC", "input", "measured cold-water temperature (live boundary)")
-        c.write_command("sense", f"{inst.name}.T_cold", f"{p}[{D_T_COLD}]")
+        c.write_command("sense", f"{inst.name}.T_cold", f"{p}[{PD.T_cold}]")
         Q = c.var("Q_demand")
-        c.emit("draws", f"{Q} = max(m_draw, 0.0) * CP * max({p}[{D_T_SET}] - {T_cold}, 0.0)",
+        c.emit("draws", f"{Q} = max(m_draw, 0.0) * CP * max({p}[{PD.T_set}] - {T_cold}, 0.0)",
                f"{x}[0] += {Q} * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
@@ -95,36 +96,36 @@ class SolarKind(ComponentKind):
         return collector.initial_state(inst.params)
 
     def stored_energy(self, inst, x):
-        return inst.params.c_eff * inst.params.area * float(x[collector.X_T])
+        return inst.params.c_eff * inst.params.area * float(x[collector.X.T])
 
     def emit(self, c, inst):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
         T_in = c.signal(inst, "T_ret", "degC", "input", "measured return from the lab = collector inlet (live boundary)")
         m_in = c.signal(inst, "m_flow", "kg/s", "input", "measured solar flow (live boundary)")
-        c.write_command("sense", f"{inst.name}.T_ret", f"{x}[{collector.X_T}]")
+        c.write_command("sense", f"{inst.name}.T_ret", f"{x}[{collector.X.T}]")
         c.write_command("sense", f"{inst.name}.m_flow", "0.0")
         mod, smod = c.module(collector.__name__), c.module(sun.__name__)
         beam, dif, cos_t, S, m, T_sup, Q_loss, Q = (c.var(v) for v in (
             "G_beam", "G_diffuse", "cos_theta", "S", "m_solar", "T_sup", "Q_loss", "Q_solar"))
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{collector.LATITUDE}], "
-               f"{p}[{collector.LONGITUDE}], {p}[{collector.TILT}], {p}[{collector.AZIMUTH}], {p}[{collector.ALBEDO}])",
+               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{collector.P.latitude}], "
+               f"{p}[{collector.P.longitude}], {p}[{collector.P.tilt}], {p}[{collector.P.azimuth}], {p}[{collector.P.albedo}])",
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
                f"{m} = max({m_in}, 0.0)",
-               f"{x}[{collector.X_TRET}] = {T_in}",
+               f"{x}[{collector.X.T_ret}] = {T_in}",
                f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})",
                f"{Q} = {m} * CP * ({T_sup} - {T_in})")
-        c.emit("volumes", f"{x}[{collector.X_EHEAT}] += {Q} * h",
-               f"{x}[{collector.X_ESOLAR}] += ({beam} + {dif}) * {p}[{collector.AREA}] * h")
+        c.emit("volumes", f"{x}[{collector.X.E_heat}] += {Q} * h",
+               f"{x}[{collector.X.E_solar}] += ({beam} + {dif}) * {p}[{collector.P.area}] * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{collector.X_T}]",
-               f"{sig('T_sup', 'degC', 'collector outlet (mean over the step; the bench set-point)')} = {x}[{collector.X_TSUP}]",
+               f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{collector.X.T}]",
+               f"{sig('T_sup', 'degC', 'collector outlet (mean over the step; the bench set-point)')} = {x}[{collector.X.T_sup}]",
                f"{sig('Q_flow', 'W', 'heat the lab water takes from the collector (the bench set-point)')} = {Q}",
                f"{sig('Q_loss', 'W', 'collector heat loss to the outdoor air')} = {Q_loss}",
                f"{sig('G_plane', 'W/m2', 'irradiance on the collector plane (beam + diffuse + ground)')} = {beam} + {dif}",
-               f"{sig('E_heat', 'J', 'heat given to the lab water since the start')} = {x}[{collector.X_EHEAT}]",
-               f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{collector.AREA}] * h",
+               f"{sig('E_heat', 'J', 'heat given to the lab water since the start')} = {x}[{collector.X.E_heat}]",
+               f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{collector.P.area}] * h",
                f"{c.ledger_entry(inst, 'heat')} += ({S} - {Q}) * h",
                f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")

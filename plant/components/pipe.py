@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP, RHO
 
 STATES = ("T",)
@@ -26,7 +26,8 @@ class Params:
     T_init: float = param(50.0, "degC", "initial water temperature", 0, 95)
 
 
-V, UA_LOSS, T_ENV, T_INIT = range(4)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -40,8 +41,8 @@ def step(dt, x, p, H_in, m_in):
     Returns the heat loss [W]. The outflow leaves at the start-of-step temperature x[0].
     """
     T = x[0]
-    Q_loss = p[UA_LOSS] * (T - p[T_ENV])
-    x[0] = T + dt * (H_in - m_in * CP * T - Q_loss) / (CP * RHO * p[V])
+    Q_loss = p[P.UA_loss] * (T - p[P.T_env])
+    x[0] = T + dt * (H_in - m_in * CP * T - Q_loss) / (CP * RHO * p[P.V])
     return Q_loss
 
 

@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 
 from .. import sun
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 
 
 @dataclass(frozen=True)
@@ -56,14 +56,15 @@ class Params:
     albedo: float = param(0.2, "1", "ground reflectance", 0.0, 1.0)
 
 
-P_PEAK, PR, GAMMA, T_NOCT, TILT, AZIMUTH, LATITUDE, LONGITUDE, ALBEDO = range(9)
+# positions in the packed parameter vector, from the declaration
+PAR = indices(Params)
 
 
 @njit(cache=True)
 def power(p, G, T_air):
     """(P_el [W], T_cell [degC]) at plane irradiance G [W/m2] and outdoor air T_air."""
-    T_cell = T_air + (p[T_NOCT] - 20.0) * G / 800.0
-    P = p[P_PEAK] * G / 1000.0 * p[PR] * (1.0 + p[GAMMA] * (T_cell - 25.0))
+    T_cell = T_air + (p[PAR.T_NOCT] - 20.0) * G / 800.0
+    P = p[PAR.P_peak] * G / 1000.0 * p[PAR.PR] * (1.0 + p[PAR.gamma] * (T_cell - 25.0))
     return max(P, 0.0), T_cell
 
 
@@ -83,8 +84,8 @@ class Kind(ComponentKind):
         mod, smod = c.module(__name__), c.module(sun.__name__)
         beam, dif, cos_t, P, T_cell = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "P_pv", "T_cell"))
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{LATITUDE}], "
-               f"{p}[{LONGITUDE}], {p}[{TILT}], {p}[{AZIMUTH}], {p}[{ALBEDO}])",
+               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{PAR.latitude}], "
+               f"{p}[{PAR.longitude}], {p}[{PAR.tilt}], {p}[{PAR.azimuth}], {p}[{PAR.albedo}])",
                f"{P}, {T_cell} = {mod}.power({p}, {beam} + {dif}, T_air)",
                f"{x}[0] += {P} * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP, RHO
 
 STATES = ("T_ret",)
@@ -40,7 +40,8 @@ class Params:
     T_init: float = param(30.0, "degC", "initial water temperature", 0, 95)
 
 
-Q_NOMINAL, T_SUP_NOMINAL, T_RET_NOMINAL, T_ROOM_NOMINAL, EXPONENT, V_WATER, T_INIT = range(7)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -65,10 +66,10 @@ def step(dt, x, p, m_flow, T_sup, T_room):
     b = T_sup - T_room if m_flow > 0.0 else a
     if b < a:  # supply colder than the water inside: emission from the warmer end only
         b = a
-    dT_n = lmtd(p[T_RET_NOMINAL] - p[T_ROOM_NOMINAL], p[T_SUP_NOMINAL] - p[T_ROOM_NOMINAL])
+    dT_n = lmtd(p[P.T_ret_nominal] - p[P.T_room_nominal], p[P.T_sup_nominal] - p[P.T_room_nominal])
     d = lmtd(a, b)
-    Q = p[Q_NOMINAL] * (d / dT_n) ** p[EXPONENT] if d > 0.0 else 0.0
-    C = CP * RHO * p[V_WATER]
+    Q = p[P.Q_nominal] * (d / dT_n) ** p[P.exponent] if d > 0.0 else 0.0
+    C = CP * RHO * p[P.V_water]
     x[0] = T_ret + dt * (m_flow * CP * (T_sup - T_ret) - Q) / C
     return T_ret, Q
 

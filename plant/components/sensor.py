@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,8 @@ class Params:
     tau_stagnant: float = param(1800.0, "s", "time constant of the stagnant pipe", 1.0, 1e6)
 
 
-LAG, OFFSET, STAGNANT_BELOW, T_ENV, TAU_STAGNANT = range(5)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 @njit(cache=True)
@@ -48,13 +49,13 @@ def read(s, i, flow, x, p, h, update):
     if not math.isfinite(x[0]):
         x[0] = raw
     if update:
-        if 0.0 <= flow < p[STAGNANT_BELOW]:
-            x[0] += -math.expm1(-h / p[TAU_STAGNANT]) * (p[T_ENV] - x[0])
-        elif p[LAG] > 0.0:
-            x[0] += -math.expm1(-h / p[LAG]) * (raw - x[0])
+        if 0.0 <= flow < p[P.stagnant_below]:
+            x[0] += -math.expm1(-h / p[P.tau_stagnant]) * (p[P.T_env] - x[0])
+        elif p[P.lag] > 0.0:
+            x[0] += -math.expm1(-h / p[P.lag]) * (raw - x[0])
         else:
             x[0] = raw
-    s[i] = x[0] + p[OFFSET]
+    s[i] = x[0] + p[P.offset]
 
 
 class Kind(ComponentKind):

@@ -84,7 +84,7 @@ import numpy as np
 from numba import njit
 
 from .. import sun
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP
 
 
@@ -113,12 +113,10 @@ class Params:
     UA_upper: float = param(0.0, "W/K", "conductance of the upper coil behind the solar valve (0: one coil)", 0.0, 1e6)
 
 
-(AREA, ETA0, A1, A2, C_EFF, B0, TILT, AZIMUTH, LATITUDE, LONGITUDE, ALBEDO, M_FLOW_MAX, DT_ON, DT_OFF,
- DT_FLOW_MIN, DT_FLOW_MAX, MODULATING, T_STORAGE_MAX, UA, T_INIT, UA_UPPER) = range(21)
-N_PARAMS = 21
-
 STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
-X_T, X_TRET, X_TSUP, X_EHEAT, X_ESOLAR = range(5)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -131,28 +129,28 @@ def absorbed(p, beam, diffuse, cos_theta):
     modifier applied)."""
     k_beam = 0.0
     if cos_theta > 0.0:
-        k_beam = min(1.0, max(0.0, 1.0 - p[B0] * (1.0 / cos_theta - 1.0)))
-    k_diffuse = max(0.0, 1.0 - p[B0])
-    return p[AREA] * p[ETA0] * (k_beam * beam + k_diffuse * diffuse)
+        k_beam = min(1.0, max(0.0, 1.0 - p[P.b0] * (1.0 / cos_theta - 1.0)))
+    k_diffuse = max(0.0, 1.0 - p[P.b0])
+    return p[P.area] * p[P.eta0] * (k_beam * beam + k_diffuse * diffuse)
 
 
 @njit(cache=True)
 def control(x, p, on, T_storage):
     """Pump command (hysteresis on T_collector - T_storage, held between dT_off and dT_on) and
     flow request; returns (on, m_flow_set)."""
-    dT = x[X_T] - T_storage
-    if T_storage > p[T_STORAGE_MAX]:
+    dT = x[X.T] - T_storage
+    if T_storage > p[P.T_storage_max]:
         on = 0.0
-    elif dT > p[DT_ON]:
+    elif dT > p[P.dT_on]:
         on = 1.0
-    elif dT < p[DT_OFF]:
+    elif dT < p[P.dT_off]:
         on = 0.0
-    m = p[M_FLOW_MAX]
-    if p[MODULATING] > 0.5:
-        span = p[DT_FLOW_MAX] - p[DT_FLOW_MIN]
-        d = x[X_T] - x[X_TRET] - p[DT_FLOW_MIN]
+    m = p[P.m_flow_max]
+    if p[P.modulating] > 0.5:
+        span = p[P.dT_flow_max] - p[P.dT_flow_min]
+        d = x[X.T] - x[X.T_ret] - p[P.dT_flow_min]
         y = (1.0 if d > 0.0 else 0.0) if span <= 0.0 else min(1.0, max(0.0, d / span))
-        m = p[M_FLOW_MAX] * y
+        m = p[P.m_flow_max] * y
     return on, m
 
 
@@ -164,14 +162,14 @@ def advance(h, x, p, S, T_air, m):
     Returns (T_sup, Q_loss): the mean outlet temperature over the step and the mean thermal loss
     [W], the latter from the node's exact energy balance
         C (T_end - T_start) = h (S - Q_loss - m cp (T_sup - T_in))."""
-    C = p[C_EFF] * p[AREA]
-    T0 = x[X_T]
+    C = p[P.c_eff] * p[P.area]
+    T0 = x[X.T]
     if m > 0.0:
-        T_in, w = x[X_TRET], 0.5
+        T_in, w = x[X.T_ret], 0.5
     else:
         T_in, w = T0, 0.0
     Tm0 = w * T_in + (1.0 - w) * T0
-    k = p[AREA] * (p[A1] + p[A2] * abs(Tm0 - T_air))
+    k = p[P.area] * (p[P.a1] + p[P.a2] * abs(Tm0 - T_air))
     # C dT/dt = alpha - beta T
     beta = k * (1.0 - w) + m * CP
     alpha = S - k * (w * T_in - T_air) + m * CP * T_in
@@ -183,9 +181,9 @@ def advance(h, x, p, S, T_air, m):
     else:
         T1 = T0 + alpha * h / C
         T_mean = 0.5 * (T0 + T1)
-    x[X_T] = T1
+    x[X.T] = T1
     Q_loss = S - m * CP * (T_mean - T_in) - C * (T1 - T0) / h if h > 0.0 else 0.0
-    x[X_TSUP] = T_mean if m > 0.0 else T1
+    x[X.T_sup] = T_mean if m > 0.0 else T1
     return T_mean, Q_loss
 
 
@@ -195,10 +193,10 @@ def settle(h, x, p, m, T_ret, T_storage):
     difference goes into the node. Without flow the return follows the storage sensor (what the
     flow modulation compares with at the next start)."""
     if m > 0.0:
-        x[X_T] += m * CP * h * (T_ret - x[X_TRET]) / (p[C_EFF] * p[AREA])
-        x[X_TRET] = T_ret
+        x[X.T] += m * CP * h * (T_ret - x[X.T_ret]) / (p[P.c_eff] * p[P.area])
+        x[X.T_ret] = T_ret
     else:
-        x[X_TRET] = T_storage
+        x[X.T_ret] = T_storage
 
 
 class Kind(ComponentKind):
@@ -219,7 +217,7 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def stored_energy(self, inst, x):
-        return inst.params.c_eff * inst.params.area * float(x[X_T])
+        return inst.params.c_eff * inst.params.area * float(x[X.T])
 
     def emit(self, c, inst):
         o = inst.options
@@ -251,10 +249,10 @@ class Kind(ComponentKind):
         beam, dif, cos_t, S, m, T_sup, Q_loss = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "S", "m_solar",
                                                                      "T_sup", "Q_loss"))
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{LATITUDE}], "
-               f"{p}[{LONGITUDE}], {p}[{TILT}], {p}[{AZIMUTH}], {p}[{ALBEDO}])",
+               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{P.latitude}], "
+               f"{p}[{P.longitude}], {p}[{P.tilt}], {p}[{P.azimuth}], {p}[{P.albedo}])",
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
-               f"{m} = min(max({m_set}, 0.0), {p}[{M_FLOW_MAX}]) if {on} > 0.5 else 0.0",
+               f"{m} = min(max({m_set}, 0.0), {p}[{P.m_flow_max}]) if {on} > 0.5 else 0.0",
                f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})")
         Q, T_ret = c.var("Q_solar"), c.var("T_ret")
         if valve:
@@ -267,33 +265,33 @@ class Kind(ComponentKind):
                    f"{st}_coil_m[{k_up}] = {m} if {side} else 0.0",
                    f"{st}_coil_Tin[{k}] = {T_sup}",
                    f"{st}_coil_Tin[{k_up}] = {T_sup}",
-                   f"{st}_coil_UA[{k}] = {p}[{UA}]",
-                   f"{st}_coil_UA[{k_up}] = {p}[{UA_UPPER}]")
+                   f"{st}_coil_UA[{k}] = {p}[{P.UA}]",
+                   f"{st}_coil_UA[{k_up}] = {p}[{P.UA_upper}]")
             coil_out = f"({st}_coil_Tout[{k_up}] if {side} else {st}_coil_Tout[{k}])"
         else:
             c.emit("hydraulics",
                    f"{st}_coil_m[{k}] = {m}",
                    f"{st}_coil_Tin[{k}] = {T_sup}",
-                   f"{st}_coil_UA[{k}] = {p}[{UA}]")
+                   f"{st}_coil_UA[{k}] = {p}[{P.UA}]")
             coil_out = f"{st}_coil_Tout[{k}]"
         c.emit("volumes",
-               f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X_TRET}]",
+               f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X.T_ret}]",
                f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
                f"{mod}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
-               f"{x}[{X_EHEAT}] += {Q} * h",
-               f"{x}[{X_ESOLAR}] += ({beam} + {dif}) * {p}[{AREA}] * h")
+               f"{x}[{X.E_heat}] += {Q} * h",
+               f"{x}[{X.E_solar}] += ({beam} + {dif}) * {p}[{P.area}] * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{X_T}]",
-               f"{sig('T_sup', 'degC', 'collector outlet = coil inlet (mean over the step)')} = {x}[{X_TSUP}]",
+               f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{X.T}]",
+               f"{sig('T_sup', 'degC', 'collector outlet = coil inlet (mean over the step)')} = {x}[{X.T_sup}]",
                f"{sig('T_ret', 'degC', 'coil outlet = collector inlet')} = {T_ret}",
                f"{sig('m_flow', 'kg/s', 'solar circuit flow')} = {m}",
                f"{sig('Q_flow', 'W', 'heat given by the coil to the storage')} = {Q}",
                f"{sig('Q_loss', 'W', 'collector heat loss to the outdoor air')} = {Q_loss}",
                f"{sig('G_plane', 'W/m2', 'irradiance on the collector plane (beam + diffuse + ground)')} = {beam} + {dif}",
-               f"{sig('E_heat', 'J', 'heat given to the storage since the start')} = {x}[{X_EHEAT}]",
-               f"{sig('E_solar', 'J', 'irradiation on the aperture since the start')} = {x}[{X_ESOLAR}]",
-               f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{AREA}] * h",
+               f"{sig('E_heat', 'J', 'heat given to the storage since the start')} = {x}[{X.E_heat}]",
+               f"{sig('E_solar', 'J', 'irradiation on the aperture since the start')} = {x}[{X.E_solar}]",
+               f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{P.area}] * h",
                f"{c.ledger_entry(inst, 'heat')} += {S} * h",
                f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")
         if valve:

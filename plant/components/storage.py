@@ -109,7 +109,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import index_of, param
+from ..component import indices, param
 from ..errors import ConfigError
 from ..water import CP, RHO
 
@@ -136,19 +136,8 @@ class Params:
     soc_Tmax: float = param(80.0, "degC", "mean temperature of SOC 1", 1.0, 120.0)
 
 
-I_VOLUME = 0
-I_HEIGHT = 1
-I_N_LAYERS = 2
-I_UA_LOSS = 3
-I_T_ENV = 4
-I_UA_LAYER = 5
-I_LIMITER = 6
-I_T_INIT_TOP = 7
-I_T_INIT_BOTTOM = 8
-I_SOC_T0 = 9
-I_SOC_TMAX = 10
-
-assert index_of(Params)["T_init_bottom"] == I_T_INIT_BOTTOM
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def state_names(params: Params) -> list[str]:
@@ -174,9 +163,9 @@ def layer_conductance(params: Params) -> float:
 
 @njit(cache=True, inline="always")
 def _ua_layer(p, N):
-    ua = p[I_UA_LAYER]
+    ua = p[P.UA_layer]
     if ua < 0.0:
-        ua = K_WATER * p[I_VOLUME] * N / (p[I_HEIGHT] * p[I_HEIGHT])
+        ua = K_WATER * p[P.volume] * N / (p[P.height] * p[P.height])
     return ua
 
 
@@ -206,7 +195,7 @@ def _limiter(r, kind):
 def n_substeps(dt, T, p, in_layer, in_m, out_layer, out_m, coil_UA, coil_m, coil_top, coil_bot):
     """Number of equal substeps `step` uses for this dt and these flows (>= 1)."""
     N = T.shape[0]
-    mL = RHO * p[I_VOLUME] / N
+    mL = RHO * p[P.volume] / N
     C = CP * mL
     ua = _ua_layer(p, N)
     g = 0.0
@@ -239,7 +228,7 @@ def n_substeps(dt, T, p, in_layer, in_m, out_layer, out_m, coil_UA, coil_m, coil
         if outk > worst:
             worst = outk
         F_above = F
-    rate = worst / mL + (2.0 * ua + p[I_UA_LOSS] / N + g) / C
+    rate = worst / mL + (2.0 * ua + p[P.UA_loss] / N + g) / C
     x = dt * rate / COURANT_MAX
     n = int(math.ceil(x))
     return n if n >= 1 else 1
@@ -274,12 +263,12 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     to ambient and heat given by the coils to the tank.
     """
     N = T.shape[0]
-    mL = RHO * p[I_VOLUME] / N
+    mL = RHO * p[P.volume] / N
     C = CP * mL
     ua = _ua_layer(p, N)
-    uaN = p[I_UA_LOSS] / N
-    Tenv = p[I_T_ENV]
-    kind = int(p[I_LIMITER])
+    uaN = p[P.UA_loss] / N
+    Tenv = p[P.T_env]
+    kind = int(p[P.limiter])
     nin = in_layer.shape[0]
     nout = out_layer.shape[0]
     ncoil = coil_top.shape[0]
@@ -384,6 +373,5 @@ def port_layer(height_m: float, params: Params) -> int:
 
 __all__ = [
     "Params", "initial_state", "state_names", "layer_conductance", "step", "n_substeps", "port_layer",
-    "I_VOLUME", "I_HEIGHT", "I_N_LAYERS", "I_UA_LOSS", "I_T_ENV",
-    "I_UA_LAYER", "I_LIMITER", "I_T_INIT_TOP", "I_T_INIT_BOTTOM", "I_SOC_T0", "I_SOC_TMAX",
+    "P",
 ]

@@ -114,7 +114,7 @@ class Kind(ComponentKind):
         if lag_call:
             c.emit("sense", lag_call.format(update="False"))
         Ql = c.var("Q_loss")
-        i_vol, i_t0, i_tmax = storage.I_VOLUME, storage.I_SOC_T0, storage.I_SOC_TMAX
+        i_vol, i_t0, i_tmax = storage.P.volume, storage.P.soc_T0, storage.P.soc_Tmax
         mean = c.var("mean")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",

@@ -78,7 +78,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, pack, param
+from ..component import Kind as ComponentKind, indices, pack, param
 from ..water import CP
 
 
@@ -92,12 +92,10 @@ class Params:
     T_grid_ret: float = param(40.0, "degC", "grid return temperature unless driven from outside", 0.0, 150.0)
 
 
-UA, EPSILON, M_FLOW_MAX, M_FLOW_GRID_MAX, T_GRID_SUP, T_GRID_RET = range(6)
 STATES = ("E_extracted", "E_fed_in", "M_extracted", "M_fed_in")
-X_E_EXTRACTED, X_E_FED_IN, X_M_EXTRACTED, X_M_FED_IN = range(4)
-
-
-
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 @njit(cache=True)
@@ -106,9 +104,9 @@ def effectiveness(p, C_house, C_grid):
     C_min, C_max = min(C_house, C_grid), max(C_house, C_grid)
     if C_min <= 0.0:
         return 0.0
-    if p[EPSILON] >= 0.0:
-        return p[EPSILON]
-    ntu = p[UA] / C_min
+    if p[P.epsilon] >= 0.0:
+        return p[P.epsilon]
+    ntu = p[P.UA] / C_min
     cr = C_min / C_max
     if 1.0 - cr < 1e-9:
         return ntu / (1.0 + ntu)
@@ -132,8 +130,8 @@ def extract(p, m_set, m_grid_set, m_ext, T_in, T_grid_sup):
     """The generator side: (house flow, house outlet, grid flow, grid outlet, effectiveness)."""
     if m_set < 0.0:
         return 0.0, T_in, 0.0, T_grid_sup, 0.0
-    m = max(min(m_set, p[M_FLOW_MAX]), m_ext)
-    m_grid = min(max(m_grid_set, 0.0), p[M_FLOW_GRID_MAX])
+    m = max(min(m_set, p[P.m_flow_max]), m_ext)
+    m_grid = min(max(m_grid_set, 0.0), p[P.m_flow_grid_max])
     Q, T_out, T_grid_out, eps = exchange(p, m, m_grid, T_in, T_grid_sup)
     return m, T_out, m_grid, T_grid_out, eps
 
@@ -143,8 +141,8 @@ def feed_in(p, m_set, m_grid_set, T_sup, T_grid_ret):
     """The consumer side: (house flow, house outlet, grid flow, grid outlet, effectiveness)."""
     if m_set >= 0.0:
         return 0.0, T_sup, 0.0, T_grid_ret, 0.0
-    m = min(-m_set, p[M_FLOW_MAX])
-    m_grid = min(max(m_grid_set, 0.0), p[M_FLOW_GRID_MAX])
+    m = min(-m_set, p[P.m_flow_max])
+    m_grid = min(max(m_grid_set, 0.0), p[P.m_flow_grid_max])
     Q, T_out, T_grid_out, eps = exchange(p, m, m_grid, T_sup, T_grid_ret)
     return m, T_out, m_grid, T_grid_out, eps
 
@@ -169,8 +167,8 @@ class Kind(ComponentKind):
                      "m_grid_set": sig("m_flow_grid_set", "kg/s", "grid-side flow through the exchanger (>= 0)"),
                      "T_grid_sup": sig("T_grid_sup", "degC", "grid supply temperature (enters when extracting)"),
                      "T_grid_ret": sig("T_grid_ret", "degC", "grid return temperature (enters when feeding in)")}
-            c.write_command("control", f"{inst.name}.T_grid_sup", f"{p}[{T_GRID_SUP}]")
-            c.write_command("control", f"{inst.name}.T_grid_ret", f"{p}[{T_GRID_RET}]")
+            c.write_command("control", f"{inst.name}.T_grid_sup", f"{p}[{P.T_grid_sup}]")
+            c.write_command("control", f"{inst.name}.T_grid_ret", f"{p}[{P.T_grid_ret}]")
             c.values[key] = slots
         return c.values[key]
 
@@ -219,10 +217,10 @@ class Kind(ComponentKind):
         fed = f"{k['m_set']} < 0.0"
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals", *lines,
-               f"{x}[{X_E_EXTRACTED}] += max({Q}, 0.0) * h",
-               f"{x}[{X_E_FED_IN}] += max(-{Q}, 0.0) * h",
-               f"{x}[{X_M_EXTRACTED}] += {mg_g} * h",
-               f"{x}[{X_M_FED_IN}] += {mg_c} * h",
+               f"{x}[{X.E_extracted}] += max({Q}, 0.0) * h",
+               f"{x}[{X.E_fed_in}] += max(-{Q}, 0.0) * h",
+               f"{x}[{X.M_extracted}] += {mg_g} * h",
+               f"{x}[{X.M_fed_in}] += {mg_c} * h",
                f"{sig('m_flow', 'kg/s', 'house-side flow (+ extraction from the grid, - feed-in)')} = {m_g} - {m_c}",
                f"{sig('T_sup', 'degC', 'house side at the supply header (outlet when extracting, inlet when feeding in)')} = "
                f"{Tin_c} if {fed} else {Tout_g}",
@@ -234,9 +232,9 @@ class Kind(ComponentKind):
                f"{sig('T_grid_out', 'degC', 'grid water leaving the exchanger')} = {Tg_c} if {fed} else {Tg_g}",
                f"{sig('Q_flow', 'W', 'heat into the house (+ extraction, - feed-in)')} = {Q}",
                f"{sig('epsilon', '1', 'exchanger effectiveness this step (0 without flow)')} = {eps_c} if {fed} else {eps_g}",
-               f"{sig('E_extracted', 'J', 'heat meter: heat taken from the grid since the start')} = {x}[{X_E_EXTRACTED}]",
-               f"{sig('E_fed_in', 'J', 'heat meter: heat given to the grid since the start')} = {x}[{X_E_FED_IN}]",
+               f"{sig('E_extracted', 'J', 'heat meter: heat taken from the grid since the start')} = {x}[{X.E_extracted}]",
+               f"{sig('E_fed_in', 'J', 'heat meter: heat given to the grid since the start')} = {x}[{X.E_fed_in}]",
                f"{sig('M_extracted', 'kg', 'heat meter: grid water through the exchanger while extracting')} = "
-               f"{x}[{X_M_EXTRACTED}]",
+               f"{x}[{X.M_extracted}]",
                f"{sig('M_fed_in', 'kg', 'heat meter: grid water through the exchanger while feeding in')} = "
-               f"{x}[{X_M_FED_IN}]")
+               f"{x}[{X.M_fed_in}]")

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 
 STATES = ("T_room", "T_mass")
 
@@ -58,8 +58,8 @@ class Params:
     T_init: float = param(21.0, "degC", "initial room and mass temperature", -10, 40)
 
 
-C_ROOM, C_MASS, H_DIRECT, H_MASS, H_ENVELOPE, A_SOLAR, F_DIR, F_DIF, PERSONS, P_PERSON = range(10)
-T_DAY, T_NIGHT, NIGHT_START, NIGHT_END, T_INIT = range(10, 15)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -70,24 +70,24 @@ def initial_state(params: Params) -> np.ndarray:
 def setpoint(p, tau):
     """Room set-point [degC] at local time tau [s since the year start]."""
     hour = (tau % 86400.0) / 3600.0
-    start, end = p[NIGHT_START], p[NIGHT_END]
+    start, end = p[P.night_start], p[P.night_end]
     if start > end:
         night = hour >= start or hour < end
     else:
         night = start <= hour < end
-    return p[T_NIGHT] if night else p[T_DAY]
+    return p[P.T_night] if night else p[P.T_day]
 
 
 @njit(cache=True)
 def step(dt, x, p, T_out, E_dir, E_dif, presence, P_el_household, Q_heating):
     """Advance the zone by dt; returns (Q_gains_internal, Q_solar, Q_loss) [W]."""
     T_r, T_m = x[0], x[1]
-    Q_int = presence * p[PERSONS] * p[P_PERSON] + P_el_household
-    Q_sol = p[A_SOLAR] * (p[F_DIR] * E_dir + p[F_DIF] * E_dif)
-    Q_rm = p[H_MASS] * (T_r - T_m)
-    Q_loss = p[H_DIRECT] * (T_r - T_out) + p[H_ENVELOPE] * (T_m - T_out)
-    x[0] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[H_DIRECT] * (T_r - T_out)) / p[C_ROOM]
-    x[1] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[H_ENVELOPE] * (T_m - T_out)) / p[C_MASS]
+    Q_int = presence * p[P.persons] * p[P.P_person] + P_el_household
+    Q_sol = p[P.A_solar] * (p[P.f_dir] * E_dir + p[P.f_dif] * E_dif)
+    Q_rm = p[P.H_mass] * (T_r - T_m)
+    Q_loss = p[P.H_direct] * (T_r - T_out) + p[P.H_envelope] * (T_m - T_out)
+    x[0] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[P.H_direct] * (T_r - T_out)) / p[P.C_room]
+    x[1] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[P.H_envelope] * (T_m - T_out)) / p[P.C_mass]
     return Q_int, Q_sol, Q_loss
 
 

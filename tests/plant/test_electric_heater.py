@@ -3,7 +3,7 @@ house with a rod in its storage (to round-off), bad links reported."""
 import numpy as np
 import pytest
 
-from plant.component import index_of, pack
+from plant.component import pack
 from plant.components import electric_heater as eh
 from plant.declaration import HOUSES
 from plant.errors import ConfigError
@@ -35,12 +35,6 @@ def _p(**kw):
     return np.append(pack(replace(eh.Params(), **kw)), 1.0)
 
 
-def test_indices_match_field_order():
-    for name, i in index_of(eh.Params).items():
-        assert getattr(eh, name.upper()) == i, name
-    assert eh.C_LAYER == len(index_of(eh.Params))
-
-
 def test_thermostat_hysteresis():
     """Opens at T_max = 90, stays open down to 85, closes below 85, holds in between."""
     p, x = _p(), eh.initial_state(None)
@@ -49,7 +43,7 @@ def test_thermostat_hysteresis():
     for T, want in seq:
         assert eh.power(x, p, 1.0, 6000.0, T) == want, T
     assert eh.power(x, p, 0.0, 6000.0, 40.0) == 0.0  # relay blocked
-    assert x[eh.X_THERMOSTAT] == 1.0  # the thermostat follows the layer even while blocked
+    assert x[eh.X.thermostat] == 1.0  # the thermostat follows the layer even while blocked
 
 
 def test_power_limited_to_p_set_and_stages():

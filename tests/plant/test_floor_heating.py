@@ -6,18 +6,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from plant.component import build_params, index_of, pack
+from plant.component import build_params, pack
 from plant.components import floor_heating as fh
 from plant.components.radiator import lmtd
 from plant.declaration import HOUSES
 from plant.errors import ConfigError
 from plant.house import load_house
 from plant.water import CP
-
-
-def test_indices_match_field_order():
-    for name, i in index_of(fh.Params).items():
-        assert getattr(fh, name.upper()) == i, name
 
 
 def steady(P, m, T_sup, T_room, dt=60.0):

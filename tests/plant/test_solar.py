@@ -20,7 +20,7 @@ def steady(G, T_in, T_air, m, h=5.0, n=4000):
     """Collector alone at normal incidence, its return held at T_in: (T_out, Q_useful)."""
     p = pack(P)
     x = sc.initial_state(P)
-    x[sc.X_TRET] = T_in
+    x[sc.X.T_ret] = T_in
     S = sc.absorbed(p, G, 0.0, 1.0)
     for _ in range(n):
         T_sup, _ = sc.advance(h, x, p, S, T_air, m)
@@ -50,7 +50,7 @@ def test_incidence_modifier_and_stagnation_balance():
     S = sc.absorbed(p, 100.0, 0.0, 1.0)
     for _ in range(10000):  # 35 time constants C / (area (a1 + a2 dT))
         _, Q_loss = sc.advance(30.0, x, p, S, 10.0, 0.0)
-    dT = x[sc.X_T] - 10.0
+    dT = x[sc.X.T] - 10.0
     assert Q_loss == pytest.approx(S, rel=1e-9)
     assert P.area * (P.a1 * dT + P.a2 * dT ** 2) == pytest.approx(S, rel=1e-6)
 
@@ -58,18 +58,18 @@ def test_incidence_modifier_and_stagnation_balance():
 def test_pump_hysteresis():
     p = pack(P)
     x = sc.initial_state(P)
-    x[sc.X_TRET] = 40.0
+    x[sc.X.T_ret] = 40.0
     for T_coll, on_before, on_after in [(43.5, 0.0, 1.0), (42.5, 0.0, 0.0), (42.5, 1.0, 1.0),
                                         (41.5, 1.0, 0.0), (44.0, 1.0, 1.0), (41.9, 0.0, 0.0)]:
-        x[sc.X_T] = T_coll
+        x[sc.X.T] = T_coll
         assert sc.control(x, p, on_before, 40.0)[0] == on_after, (T_coll, on_before)
-    x[sc.X_T] = 120.0  # storage above T_storage_max: blocked however hot the collector
+    x[sc.X.T] = 120.0  # storage above T_storage_max: blocked however hot the collector
     assert sc.control(x, p, 1.0, 96.0)[0] == 0.0
     # flow: none at a 3 K spread, full from 7 K, linear between
     for spread, share in [(2.0, 0.0), (3.0, 0.0), (5.0, 0.5), (7.0, 1.0), (12.0, 1.0)]:
-        x[sc.X_T] = 40.0 + spread
+        x[sc.X.T] = 40.0 + spread
         assert sc.control(x, p, 1.0, 20.0)[1] == pytest.approx(share * P.m_flow_max)
-    p[sc.MODULATING] = 0.0
+    p[sc.P.modulating] = 0.0
     assert sc.control(x, p, 1.0, 20.0)[1] == P.m_flow_max
 
 
@@ -77,7 +77,7 @@ def test_pump_hysteresis():
 def june_day():
     """House 1 with its collector over 15 June 2021, recorded every 5 s."""
     house = load_house("house1_solar", start="2021-06-15")
-    E0 = house.state("solar")[sc.X_T] * P.c_eff * P.area
+    E0 = house.state("solar")[sc.X.T] * P.c_eff * P.area
     times, rows = house.run(86400.0, dt=5.0, out_interval=5.0)
     return house, E0, house.catalogue.names, rows
 
@@ -86,7 +86,7 @@ def test_energy_balance_of_a_day(june_day):
     house, E0, names, rows = june_day
     L = house.ledger()
     absorbed, loss, to_storage = L["heat_solar"], L["loss_solar"], house.get("solar.E_heat")
-    stored = house.state("solar")[sc.X_T] * P.c_eff * P.area - E0
+    stored = house.state("solar")[sc.X.T] * P.c_eff * P.area - E0
     assert absorbed > 3.6e6  # a sunny June day: several kWh
     assert abs(absorbed - (to_storage + loss + stored)) < 1e-9 * absorbed
     assert house.get("solar.E_solar") == pytest.approx(L["fuel_solar"], rel=1e-12)
@@ -185,7 +185,7 @@ def test_collector_on_the_heating_storage(tmp_path):
     assert L["closure"] < 1e-9
     assert L["heat_solar"] > 0.0 and house.get("solar.E_heat") >= 0.0
     assert abs(L["heat_solar"] - house.get("solar.E_heat") - L["loss_solar"]
-               - (house.state("solar")[sc.X_T] - P.T_init) * P.c_eff * 2.0) < 1e-9 * L["heat_solar"]
+               - (house.state("solar")[sc.X.T] - P.T_init) * P.c_eff * 2.0) < 1e-9 * L["heat_solar"]
 
 
 @pytest.mark.parametrize("change, message", [

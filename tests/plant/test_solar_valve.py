@@ -69,7 +69,7 @@ def test_heat_goes_into_the_layers_of_the_coil_in_use(summer_morning):
             house.restore(snap)
             house.set_state("storage", np.linspace(70.0, 20.0, st.n_layers))
             collector = house.state("solar").copy()
-            collector[sc.X_T] = collector[sc.X_TRET] = 90.0
+            collector[sc.X.T] = collector[sc.X.T_ret] = 90.0
             house.set_state("solar", collector)
             for name, value in (("solar.on", 1.0), ("solar.m_flow_set", 0.333), ("solar.upper", side)):
                 house.set(name, value)

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from plant.component import build_params, index_of, pack
+from plant.component import build_params, pack
 from plant.components import storage as S
 from plant.components import storage_readings as R
 from plant.errors import ConfigError
@@ -50,13 +50,6 @@ def _front_width(T, T_cold, T_hot):
         raise AssertionError(f"no crossing of {level}")
 
     return cross(T_cold + 0.1 * (T_hot - T_cold)) - cross(T_cold + 0.9 * (T_hot - T_cold))
-
-
-def test_index_constants_match_params():
-    idx = index_of(S.Params)
-    for name, i in idx.items():
-        assert getattr(S, "I_" + name.upper()) == i, name
-    assert len(pack(S.Params())) == len(idx)
 
 
 def test_bad_params_raise_config_error_naming_the_key():
