@@ -1,4 +1,4 @@
-"""The diagnosis against independent truths: the public suites of labsim (plant/labsim/suite.py)
+"""The diagnosis against independent truths: the public suites of labsim (labsim/suite.py)
 and of rigsim (rigsim/suite.py, written clean-room from docs/lab/ and the physics reference).
 
 Every case is a 7-day lab-style recording made by a simulator of house 1 that shares no code with
@@ -36,7 +36,7 @@ from plant.diagnose import diagnose, recording_io  # noqa: E402
 def _suite(simulator: str):
     """(CASES, make_case(case, out, days, start, seed, ports, realisation)) of a simulator."""
     if simulator == "labsim":
-        from plant.labsim import suite
+        from labsim import suite
         return suite.CASES, suite.make_case
     from rigsim import suite
     # rigsim writes out/<case>/ itself

@@ -1,4 +1,4 @@
-"""The diagnosis on recordings of labsim (plant/labsim), a simulator of the lab that shares no code
+"""The diagnosis on recordings of labsim (labsim/), a simulator of the lab that shares no code
 with the twin: its own hydraulics, 50-layer tank, three-node radiator, building and sensors, lab
 DAQ column names and units through a columns file. Short (3-day) versions of public-suite cases,
 each exercising one part of the method on independent data:
@@ -16,7 +16,7 @@ The full 7-day suite (19 cases) with its confusion table: benchmarks/diagnose_in
 import pytest
 
 from plant.diagnose import diagnose, recording_io
-from plant.labsim.suite import make_case
+from labsim.suite import make_case
 
 DAYS = 3.0
 

@@ -14,7 +14,7 @@ import pytest
 
 from plant.catalogue import CATALOGUE
 from plant.diagnose import diagnose, plots, recording_io
-from plant.labsim.suite import make_case
+from labsim.suite import make_case
 
 DAYS, TRAIN, DPI = 1.5, 0.6, 80
 

@@ -2,8 +2,8 @@
 (upwind advection in flux form, conduction, buoyancy by convective adjustment) alone conserves it."""
 import numpy as np
 
-from plant.labsim.house import LabHouse
-from plant.labsim.storage import CP, Tank, coil_heat
+from labsim.house import LabHouse
+from labsim.storage import CP, Tank, coil_heat
 
 
 def test_a_labsim_day_closes_its_energy_ledger():

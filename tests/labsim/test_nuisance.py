@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from plant.labsim import nuisance
-from plant.labsim.generators import CP, massive_outlet
-from plant.labsim.house import LabHouse
+from labsim import nuisance
+from labsim.generators import CP, massive_outlet
+from labsim.house import LabHouse
 
 
 def test_realisation_0_is_the_nominal_rig_and_others_are_reproducible_draws():

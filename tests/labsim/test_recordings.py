@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from plant.diagnose import recording_io
-from plant.labsim.suite import CASES, make_case
+from labsim.suite import CASES, make_case
 from profiles.recording import read_recording
 
 TYPES = ["no_effect", "idle_flow_large", "heat_loss_45", "inlet_mixing_120", "sensor_lag_300",

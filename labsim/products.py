@@ -12,9 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
+import plant.tables
 from plant.tables import read_tables
 
-DATA = Path(__file__).resolve().parent.parent / "data"
+# the twin's product tables (plant/data), found through the plant package wherever it is installed
+DATA = Path(plant.tables.__file__).resolve().parent / "data"
 
 
 class Table1D:

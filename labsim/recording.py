@@ -89,7 +89,7 @@ def _write_columns(path, start, name, ports: bool = True):
     """columns.toml: each DAQ tag onto its twin signal with the unit the lab logs; the storage
     sensors with their relative heights; the boiler command in % onto 0-10 V (a range map); the
     storage's port heights (ports=False: left out, as a lab that does not know them would)."""
-    lines = ["# labsim (plant/labsim): lab DAQ tag -> twin catalogue signal, the unit the lab logs,",
+    lines = ["# labsim (labsim/): lab DAQ tag -> twin catalogue signal, the unit the lab logs,",
              "# storage sensor and port heights relative to the tank (0 = bottom, 1 = top)",
              "[recording]", f'start = "{start}"', f'file = "{name}"', ""]
     if ports:
@@ -147,7 +147,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
     ledger = house.closure()
     meta = {**truth, "start": start, "days": days, "seed": seed, "sample_s": SAMPLE_S, "rows": n,
             "file": name, "columns": [c[0] for c in COLUMNS],
-            "simulator": "plant/labsim (independent of the twin's components, compiler and kernels)",
+            "simulator": "labsim (independent of the twin's components, compiler and kernels)",
             "step_s": house.dt,
             "storage_sensor_heights_m": dict(zip([f"TS_S_TM_BT_{i}" for i in range(1, 11)], STORAGE_SENSOR_HEIGHTS)),
             "dhw_sensor_heights_m": {f"WWS_S_TM_BT_{i}": h for i, h in DHW_SENSOR_HEIGHTS.items()},
@@ -164,7 +164,7 @@ def record(house: LabHouse, out: str | Path, days: float, seed: int, start: str,
             "ledger_closure": float(ledger["closure"]),
             "water_side_closure": float(ledger["water_side_closure"]),
             "generation_wall_s": round(wall, 2),
-            "command": command or f"python -m plant.labsim.suite --out {out.parent} --days {days:g} --case {truth.get('case')}"}
+            "command": command or f"python -m labsim.suite --out {out.parent} --days {days:g} --case {truth.get('case')}"}
     (out / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
     return meta
 

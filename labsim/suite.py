@@ -1,13 +1,13 @@
 """The public suite of `twin diagnose` made by labsim: cases with known answers.
 
-    python -m plant.labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N]
+    python -m labsim.suite --out DIR [--days 7] [--case NAME ...] [--start 2021-01-10] [--seed N]
                                  [--no-ports] [--realisation R] [--list]
 
 writes DIR/<case>/ (recording.csv, columns.toml, meta.json) per case; columns.toml declares the
 storage's sensor and port heights as a lab knows them from its tank's datasheet (--no-ports: the
 port heights left out, so the twin keeps its own); meta.json holds the truth:
 the case, its effects and sizes, the rig's realisation (--realisation R >= 1: model-form
-variations drawn by plant/labsim/nuisance.py, the same rig for every case of R; 0: the nominal
+variations drawn by labsim/nuisance.py, the same rig for every case of R; 0: the nominal
 rig) and `expected`, the diagnosis outcomes counted as correct (an
 effect id of plant/diagnose/effects, or a verdict: no_missing_physics, unexplained_mismatch).
 
@@ -92,7 +92,7 @@ def make_case(case: str, out: str | Path, days: float = 7.0, start: str = "2021-
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m plant.labsim.suite", description=__doc__,
+    p = argparse.ArgumentParser(prog="python -m labsim.suite", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--out", type=Path, help="directory for the case directories")
     p.add_argument("--days", type=float, default=7.0)
@@ -112,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         if case not in CASES:
             print(f"unknown case {case!r}; --list shows them", file=sys.stderr)
             return 2
-        cmd = (f"python -m plant.labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
+        cmd = (f"python -m labsim.suite --out {a.out} --days {a.days:g} --start {a.start} --case {case}"
                + (f" --seed {a.seed}" if a.seed is not None else "") + (" --no-ports" if a.no_ports else "")
                + (f" --realisation {a.realisation}" if a.realisation else ""))
         m = make_case(case, a.out / case, a.days, a.start, seed=a.seed, command=cmd, ports=not a.no_ports,

@@ -17,7 +17,7 @@ tests/labsim/test_independence.py). Its models are written from the physics refe
   control.py     the case study's rule-based controller and a room thermostat, from the reference
   house.py       the assembled plant, explicit 10 s steps, its energy ledger
   recording.py   lab-style recordings (DAQ tags, lab units, columns.toml, meta.json)
-  suite.py       the public suite: `python -m plant.labsim.suite --out DIR [--days 7] [--case NAME]`
+  suite.py       the public suite: `python -m labsim.suite --out DIR [--days 7] [--case NAME]`
 
 Water: cp = 4180 J/(kg K), 1 l = 1 kg throughout (one value, so the ledger closes exactly).
 """
