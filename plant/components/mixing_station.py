@@ -40,8 +40,9 @@ class Params:
     leak: float = param(0.0, "1", "primary share the closed valve still passes (seat leakage)", 0.0, 0.5)
 
 
-# positions in the packed parameter vector, from the declaration
+# positions in the packed parameters and the state vector, from the declarations
 P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -52,17 +53,17 @@ def initial_state(params: Params) -> np.ndarray:
 def step(dt, x, p, T_set, m_flow_set, T_primary, T_ret):
     """Move the valve for dt; returns (m_flow, m_flow_primary, T_sup after mixing, y)."""
     m = min(max(m_flow_set, 0.0), p[P.m_flow_max])
-    y = p[P.leak] + (1.0 - p[P.leak]) * x[0]
+    y = p[P.leak] + (1.0 - p[P.leak]) * x[X.y]
     T_sup = y * T_primary + (1.0 - y) * T_ret
     if m > 0.0:
         span = T_primary - T_ret
         y_ff = (T_set - T_ret) / span if span > 0.1 else 1.0
-        x[1] = min(max(x[1] + dt * p[P.K_i] * (T_set - T_sup), -0.3), 0.3)
-        target = min(max(y_ff + x[1], 0.0), 1.0)
+        x[X.y_integral] = min(max(x[X.y_integral] + dt * p[P.K_i] * (T_set - T_sup), -0.3), 0.3)
+        target = min(max(y_ff + x[X.y_integral], 0.0), 1.0)
         # the actuator position that gives the target share past the leak
-        dy = max((target - p[P.leak]) / (1.0 - p[P.leak]), 0.0) - x[0]
+        dy = max((target - p[P.leak]) / (1.0 - p[P.leak]), 0.0) - x[X.y]
         lim = dt / p[P.t_stroke]
-        x[0] = x[0] + min(max(dy, -lim), lim)
+        x[X.y] = x[X.y] + min(max(dy, -lim), lim)
     return m, y * m, T_sup, y
 
 

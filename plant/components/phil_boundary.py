@@ -54,8 +54,10 @@ class DemandParams:
     T_cold: float = param(10.0, "degC", "cold-water temperature until the bench measures it", 1, 30)
 
 
-# positions in the packed parameter vector, from the declaration
+DEMAND_STATES = ("E_set",)
+# positions in the packed parameters and the state vector, from the declarations
 PD = indices(DemandParams)
+XD = indices(DEMAND_STATES)
 
 
 class DemandKind(ComponentKind):
@@ -74,12 +76,12 @@ class DemandKind(ComponentKind):
         c.write_command("sense", f"{inst.name}.T_cold", f"{p}[{PD.T_cold}]")
         Q = c.var("Q_demand")
         c.emit("draws", f"{Q} = max(m_draw, 0.0) * CP * max({p}[{PD.T_set}] - {T_cold}, 0.0)",
-               f"{x}[0] += {Q} * h")
+               f"{x}[{XD.E_set}] += {Q} * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
                f"{sig('Q_flow', 'W', 'heat the demand takes from the lab hot water')} = {Q}",
-               f"{sig('E_set', 'J', 'cumulative hot-water energy drawn (the bench set-point)')} = {x}[0]",
+               f"{sig('E_set', 'J', 'cumulative hot-water energy drawn (the bench set-point)')} = {x}[{XD.E_set}]",
                f"{c.ledger_entry(inst, 'fuel')} += {Q} * h",
                f"{c.ledger_entry(inst, 'heat')} += {Q} * h",
                f"{c.ledger_entry(inst, 'dhw')} += {Q} * h")

@@ -56,8 +56,10 @@ class Params:
     albedo: float = param(0.2, "1", "ground reflectance", 0.0, 1.0)
 
 
-# positions in the packed parameter vector, from the declaration
+STATES = ("E_el",)
+# positions in the packed parameters and the state vector, from the declarations
 PAR = indices(Params)
+X = indices(STATES)
 
 
 @njit(cache=True)
@@ -76,7 +78,7 @@ class Kind(ComponentKind):
     role = "component"
 
     def initial_state(self, inst):
-        return np.zeros(1)  # E_el
+        return np.zeros(len(STATES))
 
     def emit(self, c, inst):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
@@ -87,11 +89,11 @@ class Kind(ComponentKind):
                f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{PAR.latitude}], "
                f"{p}[{PAR.longitude}], {p}[{PAR.tilt}], {p}[{PAR.azimuth}], {p}[{PAR.albedo}])",
                f"{P}, {T_cell} = {mod}.power({p}, {beam} + {dif}, T_air)",
-               f"{x}[0] += {P} * h")
+               f"{x}[{X.E_el}] += {P} * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('P_el', 'W', 'electric power produced (AC)')} = {P}",
-               f"{sig('E_el', 'J', 'electric energy produced since the start')} = {x}[0]",
+               f"{sig('E_el', 'J', 'electric energy produced since the start')} = {x}[{X.E_el}]",
                f"{sig('G_plane', 'W/m2', 'irradiance on the module plane (beam + diffuse + ground)')} = {beam} + {dif}",
                f"{sig('T_cell', 'degC', 'cell temperature (NOCT model)')} = {T_cell}",
                f"{c.ledger_entry(inst, 'el')} += {P} * h")

@@ -25,6 +25,7 @@ from numba import njit
 
 from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 from ..water import CP, RHO
+from . import zone as zone_kind
 
 STATES = ("T_ret",)
 
@@ -105,7 +106,7 @@ class Kind(ComponentKind):
         T_ret, Q = c.var(f"T_{inst.name}_ret"), c.var(f"Q_{inst.name}")
         mod = c.module(self.KERNEL)
         c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, x_{inst.name}, p_{inst.name}, {m_flow}, {T_sup}, "
-                             f"x_{zone.name}[0])")
+                             f"x_{zone.name}[{zone_kind.X.T_room}])")
         c.heat_to.setdefault(zone.name, []).append(Q)
         c.emit("signals", *self.extra_signals(c, inst),
                f"{c.signal(inst, 'Q_flow', 'W', 'output', self.HEAT)} = {Q}",

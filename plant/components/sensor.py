@@ -38,24 +38,26 @@ class Params:
     tau_stagnant: float = param(1800.0, "s", "time constant of the stagnant pipe", 1.0, 1e6)
 
 
-# positions in the packed parameter vector, from the declaration
+STATES = ("value",)  # the lagged reading, before the offset
+# positions in the packed parameters and the state vector, from the declarations
 P = indices(Params)
+X = indices(STATES)
 
 
 @njit(cache=True)
 def read(s, i, flow, x, p, h, update):
     """Replace s[i] by the sensor's reading (flow < 0: no stagnant-pipe behaviour)."""
     raw = s[i]
-    if not math.isfinite(x[0]):
-        x[0] = raw
+    if not math.isfinite(x[X.value]):
+        x[X.value] = raw
     if update:
         if 0.0 <= flow < p[P.stagnant_below]:
-            x[0] += -math.expm1(-h / p[P.tau_stagnant]) * (p[P.T_env] - x[0])
+            x[X.value] += -math.expm1(-h / p[P.tau_stagnant]) * (p[P.T_env] - x[X.value])
         elif p[P.lag] > 0.0:
-            x[0] += -math.expm1(-h / p[P.lag]) * (raw - x[0])
+            x[X.value] += -math.expm1(-h / p[P.lag]) * (raw - x[X.value])
         else:
-            x[0] = raw
-    s[i] = x[0] + p[P.offset]
+            x[X.value] = raw
+    s[i] = x[X.value] + p[P.offset]
 
 
 class Kind(ComponentKind):
@@ -72,7 +74,7 @@ class Kind(ComponentKind):
             if v is not None and not isinstance(v, str):
                 c.problems.append(f"{inst.at(key)} = {v!r}: expected a signal name")
                 return
-        x = c.state(inst, np.full(1, np.nan))
+        x = c.state(inst, np.full(len(STATES), np.nan))
         p = c.param(inst, pack(inst.params))
         mod = c.module(__name__)
         f = c.s(flow) if flow else "-1.0"

@@ -58,8 +58,9 @@ class Params:
     T_init: float = param(21.0, "degC", "initial room and mass temperature", -10, 40)
 
 
-# positions in the packed parameter vector, from the declaration
+# positions in the packed parameters and the state vector, from the declarations
 P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -81,13 +82,13 @@ def setpoint(p, tau):
 @njit(cache=True)
 def step(dt, x, p, T_out, E_dir, E_dif, presence, P_el_household, Q_heating):
     """Advance the zone by dt; returns (Q_gains_internal, Q_solar, Q_loss) [W]."""
-    T_r, T_m = x[0], x[1]
+    T_r, T_m = x[X.T_room], x[X.T_mass]
     Q_int = presence * p[P.persons] * p[P.P_person] + P_el_household
     Q_sol = p[P.A_solar] * (p[P.f_dir] * E_dir + p[P.f_dif] * E_dif)
     Q_rm = p[P.H_mass] * (T_r - T_m)
     Q_loss = p[P.H_direct] * (T_r - T_out) + p[P.H_envelope] * (T_m - T_out)
-    x[0] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[P.H_direct] * (T_r - T_out)) / p[P.C_room]
-    x[1] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[P.H_envelope] * (T_m - T_out)) / p[P.C_mass]
+    x[X.T_room] = T_r + dt * (Q_heating + Q_int + 0.5 * Q_sol - Q_rm - p[P.H_direct] * (T_r - T_out)) / p[P.C_room]
+    x[X.T_mass] = T_m + dt * (Q_rm + 0.5 * Q_sol - p[P.H_envelope] * (T_m - T_out)) / p[P.C_mass]
     return Q_int, Q_sol, Q_loss
 
 
@@ -118,8 +119,8 @@ class Kind(ComponentKind):
                         f"P_hh, {' + '.join(heat)})")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('T_room', 'degC', 'living-zone temperature')} = {x}[0]",
+               f"{sig('T_room', 'degC', 'living-zone temperature')} = {x}[{X.T_room}]",
                f"{sig('T_set', 'degC', 'room set-point (with night reduction)')} = {T_set}",
-               f"{sig('T_mass', 'degC', 'envelope mass temperature')} = {x}[1]",
+               f"{sig('T_mass', 'degC', 'envelope mass temperature')} = {x}[{X.T_mass}]",
                f"{sig('Q_flow_gains', 'W', 'internal gains (people and household electricity)')} = {Q_int}",
                f"{sig('Q_flow_solar', 'W', 'solar gains')} = {Q_sol}")

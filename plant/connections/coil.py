@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 
 
 @dataclass(frozen=True)
@@ -19,7 +19,8 @@ class Params:
     m_flow: float = param(0.333, "kg/s", "pump flow when on", 0.0, 10.0)
 
 
-UA, M_FLOW = range(2)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 class Kind(ComponentKind):
@@ -43,10 +44,10 @@ class Kind(ComponentKind):
         on = c.signal(inst, "on", "1", "input", "charging pump command (0/1)")
         m = c.var("m_coil")
         c.emit("hydraulics",
-               f"{m} = {p}[{M_FLOW}] if {on} > 0.5 else 0.0",
+               f"{m} = {p}[{P.m_flow}] if {on} > 0.5 else 0.0",
                f"{st}_coil_m[{k}] = {m}",
                f"{st}_coil_Tin[{k}] = {T_sup}",
-               f"{st}_coil_UA[{k}] = {p}[{UA}]")
+               f"{st}_coil_UA[{k}] = {p}[{P.UA}]")
         Q = f"{st}_coil_Q_{k}"  # the storage says, once it knows all its coils (storage_kind.allocate)
         c.emit("signals",
                f"{c.signal(inst, 'm_flow', 'kg/s', 'output', 'charging flow through the coil')} = {m}",

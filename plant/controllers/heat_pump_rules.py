@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 from .rule_based import quantize
 
 STATES = ("valve_upper", "hp_on", "aux_on", "boiler_on", "solar_upper", "since_scan")
@@ -64,52 +64,51 @@ class Params:
     sensor_resolution: float = param(0.0, "K", "sensor resolution the rules see (0: exact)", 0.0, 5.0)
 
 
-(VALVE_UPPER_BELOW, VALVE_LOWER_ABOVE, HP_ON_BELOW, HP_OFF_ABOVE, AUX_UPPER_BELOW, AUX_LOWER_BELOW,
- AUX_UPPER_ABOVE, AUX_LOWER_ABOVE, AUX_LEVEL, HP_MODULATION, BOILER_TOP_BELOW, BOILER_ON_BELOW,
- BOILER_OFF_ABOVE, BOILER_DEMAND, SOLAR_UPPER_ABOVE, SOLAR_LOWER_BELOW, PERIOD, SENSOR_RESOLUTION) = range(18)
-X_VALVE, X_HP, X_AUX, X_BOILER, X_SOLAR, X_SINCE = range(6)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(len(STATES), dtype=np.float64)
-    x[X_SINCE] = 1e300  # the first step scans
+    x[X.since_scan] = 1e300  # the first step scans
     return x
 
 
 @njit(cache=True)
 def step(dt, x, p, T_valve_on, T_valve_off, T_hp_on, T_hp_off, T_boiler_top, T_boiler, T_collector, T_solar):
     """Scan when a period has passed; returns (valve_upper, hp_on, hp_y, aux, boiler_U, solar_upper)."""
-    x[X_SINCE] += dt
-    if x[X_SINCE] + 1e-9 >= p[PERIOD]:
-        x[X_SINCE] = 0.0
-        r = p[SENSOR_RESOLUTION]
+    x[X.since_scan] += dt
+    if x[X.since_scan] + 1e-9 >= p[P.period]:
+        x[X.since_scan] = 0.0
+        r = p[P.sensor_resolution]
         T8, T7, T3, T2 = quantize(T_valve_on, r), quantize(T_valve_off, r), quantize(T_hp_on, r), quantize(T_hp_off, r)
-        if T7 > p[VALVE_LOWER_ABOVE]:
-            x[X_VALVE] = 0.0
-        elif T8 < p[VALVE_UPPER_BELOW]:
-            x[X_VALVE] = 1.0
-        upper = x[X_VALVE] > 0.5
-        if not upper and T2 > p[HP_OFF_ABOVE]:
-            x[X_HP] = 0.0
-        elif upper or T3 < p[HP_ON_BELOW]:
-            x[X_HP] = 1.0
-        hp = x[X_HP] > 0.5
-        if not hp or ((T7 > p[AUX_UPPER_ABOVE] or not upper) and T2 > p[AUX_LOWER_ABOVE]):
-            x[X_AUX] = 0.0
-        elif T8 < p[AUX_UPPER_BELOW] or T3 < p[AUX_LOWER_BELOW]:
-            x[X_AUX] = 1.0
+        if T7 > p[P.valve_lower_above]:
+            x[X.valve_upper] = 0.0
+        elif T8 < p[P.valve_upper_below]:
+            x[X.valve_upper] = 1.0
+        upper = x[X.valve_upper] > 0.5
+        if not upper and T2 > p[P.hp_off_above]:
+            x[X.hp_on] = 0.0
+        elif upper or T3 < p[P.hp_on_below]:
+            x[X.hp_on] = 1.0
+        hp = x[X.hp_on] > 0.5
+        if not hp or ((T7 > p[P.aux_upper_above] or not upper) and T2 > p[P.aux_lower_above]):
+            x[X.aux_on] = 0.0
+        elif T8 < p[P.aux_upper_below] or T3 < p[P.aux_lower_below]:
+            x[X.aux_on] = 1.0
         T10, T5 = quantize(T_boiler_top, r), quantize(T_boiler, r)
-        if T5 > p[BOILER_OFF_ABOVE]:
-            x[X_BOILER] = 0.0
-        elif T10 < p[BOILER_TOP_BELOW] or T5 < p[BOILER_ON_BELOW]:
-            x[X_BOILER] = 1.0
+        if T5 > p[P.boiler_off_above]:
+            x[X.boiler_on] = 0.0
+        elif T10 < p[P.boiler_top_below] or T5 < p[P.boiler_on_below]:
+            x[X.boiler_on] = 1.0
         dT = quantize(T_collector, r) - quantize(T_solar, r)
-        if dT < p[SOLAR_LOWER_BELOW]:
-            x[X_SOLAR] = 0.0
-        elif dT > p[SOLAR_UPPER_ABOVE]:
-            x[X_SOLAR] = 1.0
-    return (x[X_VALVE], x[X_HP], x[X_HP] * p[HP_MODULATION], x[X_AUX] * p[AUX_LEVEL],
-            x[X_BOILER] * p[BOILER_DEMAND], x[X_SOLAR])
+        if dT < p[P.solar_lower_below]:
+            x[X.solar_upper] = 0.0
+        elif dT > p[P.solar_upper_above]:
+            x[X.solar_upper] = 1.0
+    return (x[X.valve_upper], x[X.hp_on], x[X.hp_on] * p[P.hp_modulation], x[X.aux_on] * p[P.aux_level],
+            x[X.boiler_on] * p[P.boiler_demand], x[X.solar_upper])
 
 
 class Kind(ComponentKind):
@@ -145,8 +144,8 @@ class Kind(ComponentKind):
         x = emit_step(c, self, inst, __name__, args)
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('valve_upper', 'heat pump three-way valve the rules ask for (1 = upper ports)')} = {x}[{X_VALVE}]",
-               f"{sig('hp_on', 'heat pump command of the rules (0/1)')} = {x}[{X_HP}]",
-               f"{sig('aux_on', 'back-up heater command of the rules (0/1)')} = {x}[{X_AUX}]",
-               f"{sig('boiler_on', 'boiler command of the rules (0/1)')} = {x}[{X_BOILER}]",
-               f"{sig('solar_upper', 'solar three-way valve the rules ask for (1 = upper coil)')} = {x}[{X_SOLAR}]")
+               f"{sig('valve_upper', 'heat pump three-way valve the rules ask for (1 = upper ports)')} = {x}[{X.valve_upper}]",
+               f"{sig('hp_on', 'heat pump command of the rules (0/1)')} = {x}[{X.hp_on}]",
+               f"{sig('aux_on', 'back-up heater command of the rules (0/1)')} = {x}[{X.aux_on}]",
+               f"{sig('boiler_on', 'boiler command of the rules (0/1)')} = {x}[{X.boiler_on}]",
+               f"{sig('solar_upper', 'solar three-way valve the rules ask for (1 = upper coil)')} = {x}[{X.solar_upper}]")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
 
 STATES = ("integral",)
 
@@ -31,7 +31,8 @@ class Params:
     T_i: float = param(1800.0, "s", "integral time", 10, 1e6)
 
 
-CURVE, T_SUP_CONSTANT, SLOPE, OFFSET, T_SUP_MIN, T_SUP_MAX, M_FLOW_MAX, K_P, T_I = range(9)
+# positions in the packed parameter vector, from the declaration
+P = indices(Params)
 
 
 def initial_state(params: Params) -> np.ndarray:
@@ -41,17 +42,17 @@ def initial_state(params: Params) -> np.ndarray:
 @njit(cache=True)
 def step(dt, x, p, T_room, T_room_set, T_out):
     """Returns (T_sup_set [degC], m_flow_set [kg/s])."""
-    if p[CURVE] > 0.5:
-        T_sup = T_room_set + p[SLOPE] * (T_room_set - T_out) + p[OFFSET]
-        T_sup = min(max(T_sup, p[T_SUP_MIN]), p[T_SUP_MAX])
+    if p[P.curve] > 0.5:
+        T_sup = T_room_set + p[P.slope] * (T_room_set - T_out) + p[P.offset]
+        T_sup = min(max(T_sup, p[P.T_sup_min]), p[P.T_sup_max])
     else:
-        T_sup = p[T_SUP_CONSTANT]
+        T_sup = p[P.T_sup_constant]
     e = T_room_set - T_room
-    u = p[K_P] * e + x[0]
+    u = p[P.K_p] * e + x[0]
     if 0.0 < u < 1.0 or (u <= 0.0 and e > 0.0) or (u >= 1.0 and e < 0.0):
-        x[0] += dt * p[K_P] * e / p[T_I]  # conditional integration: no wind-up at the limits
+        x[0] += dt * p[P.K_p] * e / p[P.T_i]  # conditional integration: no wind-up at the limits
     u = min(max(u, 0.0), 1.0)
-    return T_sup, u * p[M_FLOW_MAX]
+    return T_sup, u * p[P.m_flow_max]
 
 
 class Kind(ComponentKind):

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 
 STATES = ("chp_on", "boiler_on", "dhw_on", "since_scan")
 
@@ -36,8 +36,9 @@ class Params:
                                      "the 0.1 degC registers of the device maps)", 0.0, 5.0)
 
 
-(CHP_ON_BELOW, BOILER_ON_BELOW, OFF_ABOVE, DHW_ON_BELOW, DHW_OFF_ABOVE, CHP_MODULATION, BOILER_DEMAND,
- PERIOD, SENSOR_RESOLUTION) = range(9)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 @njit(cache=True)
@@ -51,32 +52,32 @@ def quantize(T, resolution):
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(4, dtype=np.float64)
-    x[3] = 1e300  # the first step scans
+    x[X.since_scan] = 1e300  # the first step scans
     return x
 
 
 @njit(cache=True)
 def step(dt, x, p, T_top, T_bottom, T_dhw_top):
     """Scan when a period has passed; returns (chp_on, chp_y_set, boiler_U_set, dhw_pump_on)."""
-    x[3] += dt
-    if x[3] + 1e-9 < p[PERIOD]:
-        return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]
-    x[3] = 0.0
-    res = p[SENSOR_RESOLUTION]
+    x[X.since_scan] += dt
+    if x[X.since_scan] + 1e-9 < p[P.period]:
+        return x[X.chp_on], x[X.chp_on] * p[P.chp_modulation], x[X.boiler_on] * p[P.boiler_demand], x[X.dhw_on]
+    x[X.since_scan] = 0.0
+    res = p[P.sensor_resolution]
     T_top, T_bottom, T_dhw_top = quantize(T_top, res), quantize(T_bottom, res), quantize(T_dhw_top, res)
-    if T_bottom > p[OFF_ABOVE]:
-        x[0] = 0.0
-        x[1] = 0.0
+    if T_bottom > p[P.off_above]:
+        x[X.chp_on] = 0.0
+        x[X.boiler_on] = 0.0
     else:
-        if T_top < p[CHP_ON_BELOW]:
-            x[0] = 1.0
-        if T_top < p[BOILER_ON_BELOW]:
-            x[1] = 1.0
-    if T_dhw_top > p[DHW_OFF_ABOVE] or T_top < T_dhw_top:
-        x[2] = 0.0
-    elif T_dhw_top < p[DHW_ON_BELOW] and T_dhw_top < T_top:
-        x[2] = 1.0
-    return x[0], x[0] * p[CHP_MODULATION], x[1] * p[BOILER_DEMAND], x[2]
+        if T_top < p[P.chp_on_below]:
+            x[X.chp_on] = 1.0
+        if T_top < p[P.boiler_on_below]:
+            x[X.boiler_on] = 1.0
+    if T_dhw_top > p[P.dhw_off_above] or T_top < T_dhw_top:
+        x[X.dhw_on] = 0.0
+    elif T_dhw_top < p[P.dhw_on_below] and T_dhw_top < T_top:
+        x[X.dhw_on] = 1.0
+    return x[X.chp_on], x[X.chp_on] * p[P.chp_modulation], x[X.boiler_on] * p[P.boiler_demand], x[X.dhw_on]
 
 
 class Kind(ComponentKind):

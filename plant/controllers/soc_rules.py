@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 from .rule_based import quantize
 
 STATES = ("chp_on", "boiler_on", "since_scan", "heater_on")
@@ -53,15 +53,14 @@ class Params:
     sensor_resolution: float = param(0.0, "K", "sensor resolution the rules see (0: exact)", 0.0, 5.0)
 
 
-(CHP_SOC_ON, CHP_ON_BELOW, CHP_SOC_OFF, CHP_OFF_ABOVE, BOILER_SOC_ON, BOILER_ON_BELOW, BOILER_SOC_OFF,
- BOILER_OFF_ABOVE, CHP_MODULATION, BOILER_DEMAND, HEATER_T_MAX, HEATER_DT, P_HEATER, PV_SURPLUS, PERIOD,
- SENSOR_RESOLUTION) = range(16)
-X_CHP, X_BOILER, X_SINCE, X_HEATER = range(4)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(len(STATES), dtype=np.float64)
-    x[X_SINCE] = 1e300  # the first step scans
+    x[X.since_scan] = 1e300  # the first step scans
     return x
 
 
@@ -77,25 +76,25 @@ def switch(on, soc, T_on, T_off, soc_on, on_below, soc_off, off_above):
 @njit(cache=True)
 def step(dt, x, p, soc, T_on, T_off, T_heater, P_pv, P_household, use_chp, use_boiler, use_heater):
     """Scan when a period has passed; returns (chp_on, chp_y, boiler_U, heater_on, heater_P)."""
-    x[X_SINCE] += dt
-    if x[X_SINCE] + 1e-9 >= p[PERIOD]:
-        x[X_SINCE] = 0.0
-        r = p[SENSOR_RESOLUTION]
+    x[X.since_scan] += dt
+    if x[X.since_scan] + 1e-9 >= p[P.period]:
+        x[X.since_scan] = 0.0
+        r = p[P.sensor_resolution]
         T_on, T_off = quantize(T_on, r), quantize(T_off, r)
         if use_chp:
-            x[X_CHP] = switch(x[X_CHP], soc, T_on, T_off, p[CHP_SOC_ON], p[CHP_ON_BELOW], p[CHP_SOC_OFF],
-                              p[CHP_OFF_ABOVE])
+            x[X.chp_on] = switch(x[X.chp_on], soc, T_on, T_off, p[P.chp_soc_on], p[P.chp_on_below], p[P.chp_soc_off],
+                              p[P.chp_off_above])
         if use_boiler:
-            x[X_BOILER] = switch(x[X_BOILER], soc, T_on, T_off, p[BOILER_SOC_ON], p[BOILER_ON_BELOW],
-                                 p[BOILER_SOC_OFF], p[BOILER_OFF_ABOVE])
+            x[X.boiler_on] = switch(x[X.boiler_on], soc, T_on, T_off, p[P.boiler_soc_on], p[P.boiler_on_below],
+                                 p[P.boiler_soc_off], p[P.boiler_off_above])
         if use_heater:
             T_h = quantize(T_heater, r)
-            if T_h > p[HEATER_T_MAX]:
-                x[X_HEATER] = 0.0
-            elif T_h < p[HEATER_T_MAX] - p[HEATER_DT]:
-                x[X_HEATER] = 1.0
-    P_h = min(p[P_HEATER], max(0.0, P_pv - P_household)) if p[PV_SURPLUS] > 0.5 else p[P_HEATER]
-    return x[X_CHP], x[X_CHP] * p[CHP_MODULATION], x[X_BOILER] * p[BOILER_DEMAND], x[X_HEATER], P_h
+            if T_h > p[P.heater_T_max]:
+                x[X.heater_on] = 0.0
+            elif T_h < p[P.heater_T_max] - p[P.heater_dT]:
+                x[X.heater_on] = 1.0
+    P_h = min(p[P.P_heater], max(0.0, P_pv - P_household)) if p[P.pv_surplus] > 0.5 else p[P.P_heater]
+    return x[X.chp_on], x[X.chp_on] * p[P.chp_modulation], x[X.boiler_on] * p[P.boiler_demand], x[X.heater_on], P_h
 
 
 class Kind(ComponentKind):
@@ -130,6 +129,6 @@ class Kind(ComponentKind):
         x = emit_step(c, self, inst, __name__, [*args, str(use_chp), str(use_boiler), str(use_heater)])
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('chp_on', 'CHP command of the rules (0/1)')} = {x}[{X_CHP}]",
-               f"{sig('boiler_on', 'boiler command of the rules (0/1)')} = {x}[{X_BOILER}]",
-               f"{sig('heater_on', 'electric heater release of the rules (0/1)')} = {x}[{X_HEATER}]")
+               f"{sig('chp_on', 'CHP command of the rules (0/1)')} = {x}[{X.chp_on}]",
+               f"{sig('boiler_on', 'boiler command of the rules (0/1)')} = {x}[{X.boiler_on}]",
+               f"{sig('heater_on', 'electric heater release of the rules (0/1)')} = {x}[{X.heater_on}]")

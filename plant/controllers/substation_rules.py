@@ -40,11 +40,10 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 from .rule_based import quantize
 
 STATES = ("extracting", "feeding_in", "since_scan")
-X_EXTRACT, X_FEED, X_SINCE = range(3)
 
 
 @dataclass(frozen=True)
@@ -61,38 +60,39 @@ class Params:
     sensor_resolution: float = param(0.0, "K", "sensor resolution the rules see (0: exact)", 0.0, 5.0)
 
 
-(ACTIVE, T_EXTRACT_ON, T_EXTRACT_OFF, T_FEED_ON, T_FEED_OFF, M_FLOW_EXTRACT, M_FLOW_FEED, M_FLOW_GRID,
- PERIOD, SENSOR_RESOLUTION) = range(10)
+# positions in the packed parameters and the state vector, from the declarations
+P = indices(Params)
+X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
     x = np.zeros(len(STATES), dtype=np.float64)
-    x[X_SINCE] = 1e300  # the first step scans
+    x[X.since_scan] = 1e300  # the first step scans
     return x
 
 
 @njit(cache=True)
 def step(dt, x, p, T_top, T_upper):
     """Scan when a period has passed; returns (m_flow_set, m_flow_grid_set)."""
-    if p[ACTIVE] < 0.5:
+    if p[P.active] < 0.5:
         return 0.0, 0.0
-    x[X_SINCE] += dt
-    if x[X_SINCE] + 1e-9 >= p[PERIOD]:
-        x[X_SINCE] = 0.0
-        r = p[SENSOR_RESOLUTION]
+    x[X.since_scan] += dt
+    if x[X.since_scan] + 1e-9 >= p[P.period]:
+        x[X.since_scan] = 0.0
+        r = p[P.sensor_resolution]
         T_top, T_upper = quantize(T_top, r), quantize(T_upper, r)
-        if T_top > p[T_EXTRACT_OFF]:
-            x[X_EXTRACT] = 0.0
-        elif T_top < p[T_EXTRACT_ON]:
-            x[X_EXTRACT] = 1.0
-        if T_upper < p[T_FEED_OFF] or x[X_EXTRACT] > 0.5:
-            x[X_FEED] = 0.0
-        elif T_upper > p[T_FEED_ON]:
-            x[X_FEED] = 1.0
-    if x[X_EXTRACT] > 0.5:
-        return p[M_FLOW_EXTRACT], p[M_FLOW_GRID]
-    if x[X_FEED] > 0.5:
-        return -p[M_FLOW_FEED], p[M_FLOW_GRID]
+        if T_top > p[P.T_extract_off]:
+            x[X.extracting] = 0.0
+        elif T_top < p[P.T_extract_on]:
+            x[X.extracting] = 1.0
+        if T_upper < p[P.T_feed_off] or x[X.extracting] > 0.5:
+            x[X.feeding_in] = 0.0
+        elif T_upper > p[P.T_feed_on]:
+            x[X.feeding_in] = 1.0
+    if x[X.extracting] > 0.5:
+        return p[P.m_flow_extract], p[P.m_flow_grid]
+    if x[X.feeding_in] > 0.5:
+        return -p[P.m_flow_feed], p[P.m_flow_grid]
     return 0.0, 0.0
 
 
@@ -128,5 +128,5 @@ class Kind(ComponentKind):
         x = emit_step(c, self, inst, __name__)
         sig = lambda local, desc: c.signal(inst, local, "1", "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{sig('extracting', 'extraction command of the rules (0/1)')} = {x}[{X_EXTRACT}]",
-               f"{sig('feeding_in', 'feed-in command of the rules (0/1)')} = {x}[{X_FEED}]")
+               f"{sig('extracting', 'extraction command of the rules (0/1)')} = {x}[{X.extracting}]",
+               f"{sig('feeding_in', 'feed-in command of the rules (0/1)')} = {x}[{X.feeding_in}]")

@@ -4,7 +4,7 @@ override a district uses, a cold house extracts from a 70 degC grid and a hot st
 each with the ledger closed; the hysteresis; bad declarations."""
 import pytest
 
-from plant.component import index_of, pack
+from plant.component import pack
 from plant.controllers import substation_rules as rules
 from plant.errors import ConfigError
 from plant.house import load_house
@@ -19,11 +19,6 @@ OFF = {"house1": {"boiler.U_set": 0.0, "chp.on": 0.0},
        "house3": {"heat_pump.on": 0.0, "heat_pump.aux": 0.0, "solar.m_flow_set": 0.0},
        "house4": {"boiler.U_set": 0.0, "heater.on": 0.0},
        "house5": {"boiler.U_set": 0.0, "chp.on": 0.0}}
-
-
-def test_indices_match_field_order():
-    for name, i in index_of(rules.Params).items():
-        assert getattr(rules, name.upper()) == i, name
 
 
 def test_hysteresis_and_inactive():
