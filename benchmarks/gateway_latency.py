@@ -170,7 +170,7 @@ def main() -> None:
         print('uvloop is not installed (pip install -e ".[fast]"): the gateway runs on asyncio only')
     ports = {s: free_port() for s in [f"gateway {loop}" for loop in loops] + ["bare pymodbus", "C server"]}
     procs = {f"gateway {loop}": subprocess.Popen(
-        [sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-tcp",
+        [sys.executable, "-m", "cli.main", "serve", "house1", "--modbus-tcp",
          f"127.0.0.1:{ports[f'gateway {loop}']}", "--speed", "1", "--loop", loop],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) for loop in loops}
     procs["bare pymodbus"] = subprocess.Popen([sys.executable, "-c", BARE, str(ports["bare pymodbus"])])

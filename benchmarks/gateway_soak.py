@@ -46,7 +46,7 @@ def rss_mb(pid: int) -> float:
 
 
 def twin(*args: str, **popen) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "gateway.cli.main", *args], cwd=REPO, text=True, **popen)
+    return subprocess.Popen([sys.executable, "-m", "cli.main", *args], cwd=REPO, text=True, **popen)
 
 
 # ------------------------------------------------------------------------------ Modbus frames

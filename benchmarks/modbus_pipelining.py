@@ -99,7 +99,7 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=300.0, help="time bound per mode")
     args = ap.parse_args()
     port = free_port()
-    server = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-tcp",
+    server = subprocess.Popen([sys.executable, "-m", "cli.main", "serve", "house1", "--modbus-tcp",
                                f"127.0.0.1:{port}", "--speed", "1"], cwd=REPO, stdout=subprocess.DEVNULL,
                               stderr=subprocess.PIPE, text=True)
     try:

@@ -37,7 +37,7 @@ BENCHES = ("space_heating", "tap_water", "solar")
 
 
 def start_bench(name: str, speed: float) -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", name, "--modbus-tcp",
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "bench", name, "--modbus-tcp",
                              "127.0.0.1:0", "--speed", str(speed)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
     port = re.search(r":(\d+)", proc.stdout.readline())
     return proc, int(port.group(1))
@@ -56,7 +56,7 @@ def stop(procs: list[subprocess.Popen]) -> None:
 
 def start_house(ports: dict[str, int], run: Path, *options: str) -> subprocess.Popen:
     benches = [f"--bench={n}=127.0.0.1:{port}" for n, port in ports.items()]
-    return subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "phil", "house1", *benches,
+    return subprocess.Popen([sys.executable, "-m", "cli.main", "phil", "house1", *benches,
                              "--record", str(run), *options], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, text=True)
 

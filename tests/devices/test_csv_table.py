@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from gateway.cli.main import main as twin
+from cli.main import main as twin
 from gateway.maps import export
 from gateway.maps.loader import DEVICES_DIR, load_all, load_map
 from gateway.maps.toml_writer import to_toml

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gateway.cli.main import main as twin
+from cli.main import main as twin
 from gateway.maps import codec, export
 from gateway.maps.lint import lint_all, lint_map, served
 from gateway.maps.loader import DEVICES_DIR, load_all, load_map

@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gateway.cli.main import main as twin
+from cli.main import main as twin
 from plant.diagnose import pipe_recording as pr
 from plant.diagnose.pipe_line import diagnose_pipe, format_report, split
 from plant.errors import ConfigError

@@ -86,7 +86,7 @@ def test_missing_command_rejected_with_requirements(tmp_path, rec):
 
 
 def test_requirements_cli(capsys):
-    from gateway.cli.main import main
+    from cli.main import main
 
     assert main(["diagnose", "--requirements", "house1"]) == 0
     out = capsys.readouterr().out
@@ -96,7 +96,7 @@ def test_requirements_cli(capsys):
 def test_a_house_the_diagnosis_does_not_know_is_refused_before_its_recording_is_read(tmp_path, rec, capsys):
     # house 2 (air-source heat pump, floor heating, no CHP): its signals would all be called
     # unknown against house 1's catalogue; the error names the house, what it lacks and the fix
-    from gateway.cli.main import main
+    from cli.main import main
     from plant.diagnose import diagnose
 
     csv, m = _write(tmp_path, rec)

@@ -10,7 +10,7 @@ def serve(tmp_path: Path, district_text: str, days: float, speed: float, house: 
     district = tmp_path / "district.toml"
     district.write_text(district_text)
     out = tmp_path / "run"
-    twin = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "district", "serve", str(district),
+    twin = subprocess.Popen([sys.executable, "-m", "cli.main", "district", "serve", str(district),
                              "--days", str(days), "--speed", str(speed), "--out", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     log = out / "logs" / f"{house}.log"

@@ -112,7 +112,7 @@ def _pids(pattern: str) -> list[int]:
 def test_a_killed_house_is_named_the_others_stop_and_every_recording_reads(tmp_path):
     path = district_file(tmp_path, {"house1": "rules", "house2": "rules"})
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "gateway.cli.main", "district", "run", path, "--days", "7", "--out", str(out)]
+    cmd = [sys.executable, "-m", "cli.main", "district", "run", path, "--days", "7", "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
     victim = None
     deadline = time.monotonic() + 300     # generous: a cold plant cache on a busy 2-core machine
@@ -151,7 +151,7 @@ def test_a_killed_launcher_leaves_no_federate_behind_and_every_recording_reads(t
     30 s later. What they recorded reads up to their last flushed step."""
     path = district_file(tmp_path, {"house1": "rules", "house2": "rules"})
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "gateway.cli.main", "district", "run", path, "--days", "7", "--out", str(out)]
+    cmd = [sys.executable, "-m", "cli.main", "district", "run", path, "--days", "7", "--out", str(out)]
     p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     f = out / "house2" / "signals.csv"
     deadline = time.monotonic() + 300     # generous: a cold plant cache on a busy 2-core machine
@@ -179,7 +179,7 @@ def test_two_hosts_share_a_district_through_the_broker_address_only(tmp_path):
     broker's address) runs house2."""
     path = district_file(tmp_path, {"house1": "rules", "house2": "rules"})
     port = engine.free_port()
-    twin = [sys.executable, "-m", "gateway.cli.main", "district"]
+    twin = [sys.executable, "-m", "cli.main", "district"]
     a = subprocess.Popen(twin + ["run", path, "--days", str(DAYS), "--out", str(tmp_path / "a"), "--only",
                                  "grid,house1", "--listen", "127.0.0.1", "--broker-port", str(port)],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -42,7 +42,7 @@ def host_b():
 
 def test_a_house_on_host_b_joins_the_broker_on_host_a(tmp_path, host_b):
     path = district_file(tmp_path, {"house1": "rules", "house2": "rules"})
-    twin = [sys.executable, "-m", "gateway.cli.main", "district"]
+    twin = [sys.executable, "-m", "cli.main", "district"]
     a = subprocess.Popen(twin + ["run", path, "--days", str(DAYS), "--out", str(tmp_path / "a"), "--only",
                                  "grid,house1", "--listen", "10.77.0.1", "--broker-port", "23500",
                                  "--interface", "10.77.0.1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -6,12 +6,12 @@ import sys
 import numpy as np
 import pytest
 
-from gateway.cli.main import main
+from cli.main import main
 from gateway.kpi import kpis, load_series, soc_swings
 from plant.errors import ConfigError
 from plant.house import load_house
 
-TWIN = [sys.executable, "-m", "gateway.cli.main"]
+TWIN = [sys.executable, "-m", "cli.main"]
 
 
 def test_kpi_of_a_serve_recording_table_and_json(tmp_path, capsys):

@@ -5,7 +5,7 @@ import importlib.util
 import numpy as np
 import pytest
 
-from gateway.cli.main import main
+from cli.main import main
 from plant.house import load_house
 from tests.conftest import require_tool
 

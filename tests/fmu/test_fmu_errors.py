@@ -104,7 +104,7 @@ def test_unbound_input_name(storage_fmu):
 
 
 def test_cli_reports_errors_without_traceback(tmp_path, capsys):
-    from gateway.cli.main import main
+    from cli.main import main
 
     junk = tmp_path / "junk.fmu"
     junk.write_bytes(b"nope")

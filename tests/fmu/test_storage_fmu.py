@@ -144,7 +144,7 @@ def test_bad_parameter_is_an_fmu_error(storage_fmu):
 
 
 def test_cli_inspect_prints_variables_units_platforms(storage_fmu, capsys):
-    from gateway.cli.main import main
+    from cli.main import main
 
     assert main(["fmu", "inspect", str(storage_fmu)]) == 0
     out = capsys.readouterr().out
@@ -163,7 +163,7 @@ def _repack(src, dst, keep):
 
 
 def test_cli_inspect_says_clearly_when_only_win64(storage_fmu, tmp_path, capsys):
-    from gateway.cli.main import main
+    from cli.main import main
 
     win = _repack(storage_fmu, tmp_path / "win.fmu", lambda n: n == "modelDescription.xml")
     with zipfile.ZipFile(win, "a") as zf:
@@ -174,7 +174,7 @@ def test_cli_inspect_says_clearly_when_only_win64(storage_fmu, tmp_path, capsys)
 
 
 def test_cli_build_storage_writes_fmu(tmp_path, monkeypatch, storage_fmu):
-    from gateway.cli.main import main
+    from cli.main import main
 
     monkeypatch.setattr("plant.fmu.build.default_cache_dir", lambda: storage_fmu.parent)
     out = tmp_path / "storage.fmu"

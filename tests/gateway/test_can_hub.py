@@ -175,7 +175,7 @@ def test_socketcand_without_a_hub_fails_fast_with_the_fix(hub):
 
 def test_cli_serves_a_hub_until_interrupted():
     env = {**os.environ, "PYTHONPATH": str(REPO)}
-    child = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "can-hub", "--port", "0"],
+    child = subprocess.Popen([sys.executable, "-m", "cli.main", "can-hub", "--port", "0"],
                              cwd=REPO, env=env, stdout=subprocess.PIPE, text=True)
     try:
         line = child.stdout.readline()

@@ -69,7 +69,7 @@ def test_virtual_port_serves_on_its_own_pair():
 
 
 def test_twin_serve_virtual_rtu_prints_a_path_a_master_reads(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-rtu",
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "serve", "house1", "--modbus-rtu",
                              "virtual", "--lock-step"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:

@@ -84,7 +84,7 @@ def test_scenario_file_errors_name_the_file_and_the_fix(tmp_path):
 
 
 def test_twin_serve_lock_step_over_stdin(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-tcp",
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "serve", "house1", "--modbus-tcp",
                              "127.0.0.1:0", "--lock-step", "--record", str(tmp_path / "rec")],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     out, _ = proc.communicate("step 30\nstatus\nbogus\nquit\n", timeout=120)
@@ -95,7 +95,7 @@ def test_twin_serve_lock_step_over_stdin(tmp_path):
 
 
 def test_serve_without_transport_is_a_clear_error():
-    proc = subprocess.run([sys.executable, "-m", "gateway.cli.main", "serve", "house1"],
+    proc = subprocess.run([sys.executable, "-m", "cli.main", "serve", "house1"],
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and "no transport; give --modbus-tcp" in proc.stderr
 

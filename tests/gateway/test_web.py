@@ -168,7 +168,7 @@ def test_fault_injection_is_off_without_a_token(gateway):
 
 def test_twin_serve_http_serves_the_api(tmp_path):
     proc = subprocess.Popen(
-        [sys.executable, "-m", "gateway.cli.main", "serve", "house1", "--modbus-tcp", "127.0.0.1:0",
+        [sys.executable, "-m", "cli.main", "serve", "house1", "--modbus-tcp", "127.0.0.1:0",
          "--lock-step", "--http", "127.0.0.1:0"],
         stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:

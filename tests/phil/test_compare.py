@@ -22,7 +22,7 @@ def test_compare_a_run_with_its_benches_and_the_house_alone(tmp_path):
     finally:
         for s in servers.values():
             s.stop()
-    out = subprocess.run([sys.executable, "-m", "gateway.cli.main", "phil", "compare", str(tmp_path / "run")],
+    out = subprocess.run([sys.executable, "-m", "cli.main", "phil", "compare", str(tmp_path / "run")],
                          cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     md = (tmp_path / "run" / "compare.md").read_text()
@@ -44,6 +44,6 @@ def test_compare_refuses_a_run_that_is_not_phil(tmp_path):
     (tmp_path / "signals.csv").write_text("time,a\n0,1\n")
     (tmp_path / "meta.json").write_text('{"kind": "serve"}')
     (tmp_path / "events.csv").write_text("t,kind\n")
-    out = subprocess.run([sys.executable, "-m", "gateway.cli.main", "phil", "compare", str(tmp_path)],
+    out = subprocess.run([sys.executable, "-m", "cli.main", "phil", "compare", str(tmp_path)],
                          cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert out.returncode != 0 and "not a PHIL run" in out.stderr + out.stdout

@@ -28,7 +28,7 @@ SPEED = 150.0
 
 
 def _bench_process(*extra: str, speed: float = SPEED, name: str = "space_heating") -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", name,
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "bench", name,
                              "--modbus-tcp", "127.0.0.1:0", "--speed", str(speed), *extra],
                             cwd=ROOT, stdout=subprocess.PIPE, text=True)
     line = proc.stdout.readline()

@@ -90,7 +90,7 @@ def test_space_heating_bench_as_plc_process_polling_the_twin(tmp_path):
     loop = PhilLoop("house1", {"space_heating": BenchAddress("127.0.0.1", 0, serve=True)},
                     PhilOptions(speed=100.0, dt=2.0, hours=0.5, typeday=1, start_h=31.0, warmup_s=300.0,
                                 record=tmp_path / "run"))
-    proc = subprocess.Popen([sys.executable, "-m", "gateway.cli.main", "bench", "space_heating",
+    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "bench", "space_heating",
                              "--plc", loop.served["space_heating"], "--speed", "100", "--period", "0.005"],
                             cwd=ROOT, stdout=subprocess.PIPE, text=True)
     try:

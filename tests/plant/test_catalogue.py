@@ -12,7 +12,7 @@ import plant.compiler
 def refuse(decl):
     raise SystemExit("a house compiled on import")
 plant.compiler.compile_plant = refuse
-import plant.catalogue, plant.fmu.house, plant.fmu.housefile, plant.truth.recording, plant.diagnose, gateway.cli.main
+import plant.catalogue, plant.fmu.house, plant.fmu.housefile, plant.truth.recording, plant.diagnose, cli.main
 print("imported")
 """
 

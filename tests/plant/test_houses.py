@@ -3,7 +3,7 @@ at their thresholds, the laboratory names resolve, and bad house files are rejec
 import numpy as np
 import pytest
 
-from gateway.cli.main import main as twin
+from cli.main import main as twin
 from plant.errors import ConfigError
 from plant.house import load_house
 from plant.housefile import ALIASES, resolve

@@ -1,6 +1,6 @@
 """Entry point of the `twin` console script: collects the subcommand modules of this package.
 
-Each module in gateway/cli/ (other than this one) defines `register(subparsers)`, which adds its
+Each module in cli/ (other than this one) defines `register(subparsers)`, which adds its
 parser and sets `func=<callable(args) -> int>` as default.
 """
 from __future__ import annotations
@@ -28,12 +28,12 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    import gateway.cli as pkg
+    import cli as pkg
 
     for info in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
         if info.name == "main":
             continue
-        module = importlib.import_module(f"gateway.cli.{info.name}")
+        module = importlib.import_module(f"cli.{info.name}")
         if hasattr(module, "register"):
             module.register(sub)
     return parser
