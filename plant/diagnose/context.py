@@ -29,6 +29,35 @@ MODES = {
 }
 
 
+#: a generator's states the training window must hold where the recording has them: (command,
+#: threshold); MODE_MIN_S of each, when the recording holds twice that
+GENERATOR_STATES = (("chp.on", 0.5), ("boiler.U_set", 2.0))
+MODE_MIN_S = 1800.0
+
+
+def covering_split(t, data, t_split: float, t_max: float) -> float:
+    """The end of the training window: t_split, moved later (up to t_max) to the end of the first
+    standstill or run of a generator that the training window lacks and the rest of the recording
+    holds. Why: a candidate acting in that state (an idle CHP that keeps flowing) has nothing to be
+    fitted on otherwise. rigsim's idle_flow_large (realisation 2): its CHP ran through the two
+    training days and stood five times after; fitted on no standstill, the idle flow came out 0."""
+    dt = np.diff(t, append=t[-1])
+    for cmd, on in GENERATOR_STATES:
+        if cmd not in data:
+            continue
+        for state in (np.nan_to_num(data[cmd]) > on, ~(np.nan_to_num(data[cmd]) > on)):
+            if dt[state & (t <= t_split)].sum() >= MODE_MIN_S or dt[state].sum() < 2 * MODE_MIN_S:
+                continue
+            later = np.flatnonzero(state & (t > t_split))
+            if not later.size:
+                continue
+            # the end of the first block of this state after the split
+            gaps = np.flatnonzero(np.diff(later) > 1)
+            end = t[later[gaps[0]] if gaps.size else later[-1]]
+            t_split = max(t_split, min(float(end), t_max))
+    return t_split
+
+
 @dataclass(frozen=True)
 class Context:
     """The recording as every stage sees it. Built once from the recording (build); a stage that
@@ -65,7 +94,7 @@ class Context:
         valid = rec.valid if rec.valid is not None else np.ones(n, bool)
         valid = valid & (t >= t[0] + warmup_h * 3600.0)
         span = t[-1] - t[0]
-        t_split = t[0] + min(train_days * 86400.0, 0.4 * span)
+        t_split = covering_split(t, rec.data, t[0] + min(train_days * 86400.0, 0.4 * span), t[0] + 0.5 * span)
         train = valid & (t <= t_split)
         held = valid & (t > t_split)
         h_train = (t_split - t[0]) / 3600.0 - warmup_h
