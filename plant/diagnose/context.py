@@ -29,10 +29,17 @@ MODES = {
 }
 
 
-#: a generator's states the training window must hold where the recording has them: (command,
-#: threshold); MODE_MIN_S of each, when the recording holds twice that
-GENERATOR_STATES = (("chp.on", 0.5), ("boiler.U_set", 2.0))
+#: a generator's command and the value above which it runs: the modes' flags and the states the
+#: training window must hold where the recording has them (MODE_MIN_S of each, when the recording
+#: holds twice that)
+GENERATOR_STATES = {"chp": ("chp.on", 0.5), "boiler": ("boiler.U_set", 2.0)}
 MODE_MIN_S = 1800.0
+
+
+def running(data, unit: str) -> np.ndarray:
+    """Samples at which the recording commands the generator `unit` to run."""
+    cmd, on = GENERATOR_STATES[unit]
+    return np.nan_to_num(data[cmd]) > on
 
 
 def covering_split(t, data, t_split: float, t_max: float) -> float:
@@ -42,10 +49,11 @@ def covering_split(t, data, t_split: float, t_max: float) -> float:
     fitted on otherwise. rigsim's idle_flow_large (realisation 2): its CHP ran through the two
     training days and stood five times after; fitted on no standstill, the idle flow came out 0."""
     dt = np.diff(t, append=t[-1])
-    for cmd, on in GENERATOR_STATES:
+    for unit, (cmd, _) in GENERATOR_STATES.items():
         if cmd not in data:
             continue
-        for state in (np.nan_to_num(data[cmd]) > on, ~(np.nan_to_num(data[cmd]) > on)):
+        runs = running(data, unit)
+        for state in (runs, ~runs):
             if dt[state & (t <= t_split)].sum() >= MODE_MIN_S or dt[state].sum() < 2 * MODE_MIN_S:
                 continue
             later = np.flatnonzero(state & (t > t_split))
@@ -116,8 +124,7 @@ class Context:
             if d.size > 10:
                 noise[j] = 1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0)
         cmd = rec.data
-        chp_on = cmd["chp.on"] > 0.5
-        boiler_on = cmd["boiler.U_set"] > 2.0
+        chp_on, boiler_on = running(cmd, "chp"), running(cmd, "boiler")
         heating_on = cmd["mixer.m_flow_set"] > 0.005
         dhw_on = cmd["dhw_pump.on"] > 0.5
         flags = {"chp_on": chp_on, "chp_off": ~chp_on, "boiler_on": boiler_on, "heating_on": heating_on,
