@@ -6,12 +6,18 @@ import argparse
 import json
 import signal
 
+# the PHIL house kinds live with the PHIL side (phil/kinds.py) and register with the house
+# compiler on import: every `twin` command then loads plant/houses/house3_phil.toml
+import phil.kinds  # noqa: F401,E402
+
 EXAMPLES = """examples:
   twin bench space_heating --modbus-tcp 127.0.0.1:5031 &
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 60 --typeday 1 --hours 6 --record runs/phil2
   twin phil house1 --bench space_heating=serve:127.0.0.1:5040 --speed 60 --hours 1   # the PLC polls
   twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
+  twin bench brine --modbus-tcp 127.0.0.1:5034 --speed 200 &
+  twin phil house3 --bench brine=127.0.0.1:5034 --typeday 1 --start 24 --hours 1 --speed 200 --step 2   # SF3's ground collector
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md)
@@ -21,7 +27,8 @@ EXAMPLES = """examples:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml), 'lint', 'table' or 'compare'")
+    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml, house3 = house3_phil.toml), "
+                   "'lint', 'table' or 'compare'")
     p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path); with 'compare': the run directory")
     p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
     p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT",

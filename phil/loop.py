@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from gateway.clock import PacedClock
+from phil import kinds  # noqa: F401  (registers measured_ground_collector: house3_phil.toml)
 from phil.benchmap import BenchMap, load_bench_map
 from phil.master import BenchLink, ExchangeError
 from phil.served import ServedLink, SharedServer
@@ -29,7 +30,7 @@ from plant.errors import ConfigError
 from plant.house import load_house
 from profiles.recording import Recorder
 
-HOUSE_FILES = {"house1": "house1_phil", "SF1": "house1_phil"}
+HOUSE_FILES = {"house1": "house1_phil", "SF1": "house1_phil", "house3": "house3_phil", "SF3": "house3_phil"}
 
 
 @dataclass

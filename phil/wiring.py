@@ -1,18 +1,21 @@
 """Wiring: which simulated signals make a bench's set-points, and where its measurements go.
 
 One entry per bench kind (the map's id): `setpoints(house)` gives the §13.2 set-points in the
-map's device units from the PHIL house (plant/houses/house1_phil.toml), `feed(house, values)`
-sets the house's live measured boundary from judged measurements, `pairs` names each set-point
-with the measurement that shows whether the bench followed it, `heat` the measurement that is
-the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it is compared with,
-`clock` the bench PLC's clock [s] read with the meter,
-`ideal(house)` (optional) what a perfect bench would measure, fed during the warm-up.
+map's device units from the PHIL house (plant/houses/house1_phil.toml, house3_phil.toml),
+`feed(house, values)` sets the house's live measured boundary from judged measurements, `pairs`
+names each set-point with the measurement that shows whether the bench followed it, `heat` the
+measurement that is the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it
+is compared with, `clock` the bench PLC's clock [s] read with the meter, `ideal(house)`
+(optional) what a perfect bench would measure, fed during the warm-up.
 
   space_heating  supply and flow the thermostat requests, the radiator return -> measured supply
                  and flow feed the radiators (mixer.T_sup, mixer.m_flow)
   tap_water      cumulative demand energy dhw.E_set -> measured cold water feeds the demand
   solar          collector outlet, heat and temperature -> measured return and flow feed the
                  collector (solar.T_ret, solar.m_flow)
+  brine          (SF3) the ground collector's brine outlet and ground temperature -> measured
+                 brine from the lab's heat pump and its flow feed the collector (ground.T_ret,
+                 ground.m_flow; plant/houses/house3_phil.toml, phil/kinds.py)
 """
 from __future__ import annotations
 
@@ -95,6 +98,15 @@ def _solar_feed(house: Any, values: dict[str, float]) -> None:
     house.set("solar.m_flow", values["SFW_STVL_l_per_min"] / L_PER_MIN)
 
 
+def _brine_setpoints(house: Any) -> dict[str, float]:
+    return {"STM_BCRLaM_Set_degC": house.get("ground.T_sup"), "T_ground_degC": house.get("ground.T_ground")}
+
+
+def _brine_feed(house: Any, values: dict[str, float]) -> None:
+    house.set("ground.T_ret", values["STM_BCVL_degC"])
+    house.set("ground.m_flow", values["SFW_BC_l_per_min"] / L_PER_MIN)
+
+
 WIRINGS = {
     "space_heating": Wiring(
         setpoints=_space_heating_setpoints, feed=_space_heating_feed,
@@ -116,4 +128,10 @@ WIRINGS = {
         heat="E_ST_kWh", model_heat="solar.Q_flow", flow="SFW_STVL_l_per_min",
         signals=("solar.T_collector", "solar.T_sup", "solar.Q_flow", "solar.T_ret", "solar.m_flow",
                  "solar.G_plane", "weather.T_air")),
+    "brine": Wiring(
+        setpoints=_brine_setpoints, feed=_brine_feed,
+        pairs=(("STM_BCRLaM_Set_degC", "STM_BCRLaM_degC"),),
+        heat="E_BC_kWh", model_heat="ground.Q_flow", flow="SFW_BC_l_per_min",
+        signals=("ground.T_sup", "ground.T_ret", "ground.m_flow", "ground.Q_flow", "ground.T_ground",
+                 "ground.T_undisturbed", "weather.T_air")),
 }

@@ -118,3 +118,22 @@ def pi_step(integral: float, error: float, h: float, k_p: float, t_i: float,
         integral_new = integral   # hold the integral while saturated
         out = k_p * (error + integral_new)
     return min(max(out, lo), hi), integral_new
+
+
+def conditioning_power(x: dict[str, float], p: dict[str, float], h: float, T_set: float, mc: float,
+                       T_in: float, T_sensor: float, C: float) -> None:
+    """One step of a bench's heater/chiller that brings water arriving at T_in (flow capacity mc
+    [W/K]) in a node of heat capacity C [J/K] to a set temperature: the followed set-point
+    x['T_target'] moves towards T_set at most p['ramp_T'] K/s (its ramp limit); the feed-forward
+    mc (T_target - T_in) + C dT_target/dt plus a PI (p['K_p'] W/K, p['T_i'] s) on the outlet
+    sensor T_sensor ask for a power, clamped to [-P_cool_max, P_heat_max] (its capacity) and
+    reached with the lag p['tau_heater']: x['P'] [W]; x['i_T'] is the PI's integral."""
+    ramp = p["ramp_T"] * h
+    change = min(max(T_set - x["T_target"], -ramp), ramp)
+    x["T_target"] += change
+    lo, hi = -p["P_cool_max"], p["P_heat_max"]
+    feed_forward = mc * (x["T_target"] - T_in) + C * change / h
+    correction, x["i_T"] = pi_step(x["i_T"], x["T_target"] - T_sensor, h, p["K_p"], p["T_i"],
+                                   lo - feed_forward, hi - feed_forward)
+    want = min(max(feed_forward + correction, lo), hi)
+    x["P"] += (want - x["P"]) * min(h / p["tau_heater"], 1.0)

@@ -18,6 +18,7 @@ from gateway.device.plant_port import PlantPort
 from gateway.device.refusal import Refusal
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from phil.benchmap import BenchMap, load_bench_map
+from phil.emulator.brine import BrineBench
 from phil.emulator.model import BenchModel, read_params
 from phil.emulator.solar import SolarBench
 from phil.emulator.space_heating import SpaceHeatingBench
@@ -25,7 +26,8 @@ from phil.emulator.tap_water import TapWaterBench
 from plant.errors import ConfigError
 
 MODELS: dict[str, type[BenchModel]] = {
-    "space_heating": SpaceHeatingBench, "tap_water": TapWaterBench, "solar": SolarBench}
+    "space_heating": SpaceHeatingBench, "tap_water": TapWaterBench, "solar": SolarBench,
+    "brine": BrineBench}
 
 
 class BenchDevice(Device):
