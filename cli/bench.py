@@ -15,12 +15,13 @@ EXAMPLES = """examples:
   twin bench space_heating --modbus-tcp 127.0.0.1:0 --speed 300 --param m_flow_max=0.05
   twin bench space_heating --plc 127.0.0.1:5040 --period 0.05    # the PLC polls the twin
   twin bench brine --modbus-tcp 127.0.0.1:5034 --speed 200 --param P_heat_max=6000   # SF3's heat-pump source
+  twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200         # the district grid emulator
   twin bench list
 """
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("bench", help="run a PHIL emulator bench (space_heating, tap_water, solar, brine) on Modbus TCP",
+    p = sub.add_parser("bench", help="run a PHIL emulator bench (space_heating, tap_water, solar, brine, grid) on Modbus TCP",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("name", help="bench (phil/benches/NAME.toml), or 'list'")
     p.add_argument("--modbus-tcp", default="127.0.0.1:5031", metavar="HOST:PORT",

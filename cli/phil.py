@@ -18,6 +18,8 @@ EXAMPLES = """examples:
   twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
   twin bench brine --modbus-tcp 127.0.0.1:5034 --speed 200 &
   twin phil house3 --bench brine=127.0.0.1:5034 --typeday 1 --start 24 --hours 1 --speed 200 --step 2   # SF3's ground collector
+  twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200 &
+  twin phil house1 --bench grid=127.0.0.1:5035 --district coses --hours 1 --speed 200 --step 2   # SF1's node of the district grid
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md)
@@ -53,6 +55,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--retry-after", type=float, default=1.0, help="s (wall) before a bench whose exchange "
                    "failed is tried again; meanwhile its values are held and the other benches keep their pace")
     p.add_argument("--stop-file", help="the run stops (safe set-points sent) once this file exists")
+    p.add_argument("--district", default="coses", help="with the grid bench: the district whose grid is "
+                   "simulated, the house at its node there (plant/districts/NAME.toml or a path)")
     p.set_defaults(func=run)
 
 
@@ -89,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
         speed=args.speed, dt=args.step, hours=args.hours, typeday=args.typeday, record=args.record,
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
         stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age,
-        retry_s=args.retry_after))
+        retry_s=args.retry_after, district=args.district))
     for name, address in loop.served.items():
         print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
               f"{loop.channels[name].map.dmap.unit_id})", flush=True)

@@ -66,6 +66,8 @@ class PhilOptions:
     served_age_s: float = 2.0         # served benches: a measurement not written this long (wall) is silent
     start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
                                       # the house gets there unpaced on ideal benches
+    district: str = "coses"           # the grid bench: the district file whose grid is simulated
+                                      # (the house at its node there, phil/grid.py)
 
 
 def house_file(house: str) -> str:
@@ -125,6 +127,9 @@ class PhilLoop:
                 bmap, link, SetpointLimiter(bmap),
                 MeasurementGuard(bmap, options.stale_s, options.stop_s, time.monotonic()).check_units(
                     WIRINGS[bmap.id].pairs), WIRINGS[bmap.id])
+        for ch in self.channels.values():
+            if ch.wiring.boundary:      # the simulated side a bench needs beside the house (the grid)
+                self.house = ch.wiring.boundary(self.house, options)
         self.recorder = None
         for server in servers:
             server.start()
@@ -136,6 +141,7 @@ class PhilLoop:
             "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
             "typeday": options.typeday, "start_h": options.start_h,
             "benches": {n: str(a) for n, a in self.addresses.items()}, "served": self.served,
+            **({"district": options.district} if any(ch.wiring.boundary for ch in self.channels.values()) else {}),
         }, interval=0.0) if options.record else None
         self.stop_reason = ""
         self.warmed = 0.0
@@ -308,6 +314,9 @@ class PhilLoop:
             ch.link.close()
         report = self.tally.report(self.house, self.stop_reason, self.clock.lateness())
         report["cycle_s"] = self.o.dt / self.o.speed
+        boundary = getattr(self.house, "boundary_report", None)     # the simulated grid's ledger
+        if boundary:
+            report.update(boundary())
         if self.recorder:
             self.recorder.close({"report": report})
             import json

@@ -228,6 +228,11 @@ def format_report(report: dict[str, Any]) -> str:
                          + f", {f['heat_made_up_kWh']:.2f} kWh made up above the hour before")
         if b["safe_sent"]:
             lines.append(f"    safe set-points sent: {b['safe_sent']}")
+    grid = report.get("grid")
+    if grid:
+        lines.append(f"  grid ({grid['district']}, the house at node {grid['node']}): plant {grid['plant_kWh']:.3f} kWh, "
+                     f"pipe losses {grid['pipe_losses_kWh']:.3f} kWh, to the house {grid['to_houses_kWh']:.3f} kWh, "
+                     f"stored {grid['delta_stored_kWh']:+.3f} kWh; closure {grid['closure']:.1e}")
     lat = report["lateness_ms"]
     lines.append(f"  step lateness: median {lat['median']} ms, p99 {lat['p99']} ms; the twin's step "
                  f"(exchanges + house): median {report['step_ms']['median']} ms, p99 {report['step_ms']['p99']} ms")

@@ -6,7 +6,8 @@ map's device units from the PHIL house (plant/houses/house1_phil.toml, house3_ph
 names each set-point with the measurement that shows whether the bench followed it, `heat` the
 measurement that is the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it
 is compared with, `clock` the bench PLC's clock [s] read with the meter, `ideal(house)`
-(optional) what a perfect bench would measure, fed during the warm-up.
+(optional) what a perfect bench would measure, fed during the warm-up, `boundary` (optional) the
+simulated side the bench needs beside the house.
 
   space_heating  supply and flow the thermostat requests, the radiator return -> measured supply
                  and flow feed the radiators (mixer.T_sup, mixer.m_flow)
@@ -16,6 +17,10 @@ is compared with, `clock` the bench PLC's clock [s] read with the meter, `ideal(
   brine          (SF3) the ground collector's brine outlet and ground temperature -> measured
                  brine from the lab's heat pump and its flow feed the collector (ground.T_ret,
                  ground.m_flow; plant/houses/house3_phil.toml, phil/kinds.py)
+  grid           (a district house) the simulated grid's supply temperature and differential
+                 pressure at the house's node -> measured grid flow and return of the lab's
+                 substation are the house's draw on the grid (grid.m_flow, grid.T_return;
+                 phil/grid.py, which `boundary` adds to the house)
 """
 from __future__ import annotations
 
@@ -46,6 +51,9 @@ class Wiring:
     #: what the building asked and got, for the shortfall report: (flow requested, flow measured
     #: [l/min], heat requested, heat delivered [W])
     demand: Callable[[Any], tuple[float, float, float, float]] | None = None
+    #: the simulated side the bench needs beside the house (the district grid): (house, options)
+    #: -> the house and it as one plant (phil/grid.py HouseOnGrid)
+    boundary: Callable[[Any, Any], Any] | None = None
 
 
 FLOWING = 0.5
@@ -107,6 +115,24 @@ def _brine_feed(house: Any, values: dict[str, float]) -> None:
     house.set("ground.m_flow", values["SFW_BC_l_per_min"] / L_PER_MIN)
 
 
+PA_PER_BAR = 1.0e5
+
+
+def _grid_setpoints(house: Any) -> dict[str, float]:
+    return {"STM_TGVL_Set_degC": house.get("grid.T_sup"), "SDP_TG_Set_bar": house.get("grid.dp") / PA_PER_BAR}
+
+
+def _grid_feed(house: Any, values: dict[str, float]) -> None:
+    house.set("grid.T_return", values["STM_TGRL_degC"])
+    house.set("grid.m_flow", values["SFW_TG_l_per_min"] / L_PER_MIN)
+
+
+def _grid_boundary(house: Any, options: Any) -> Any:
+    from phil.grid import GridSide, HouseOnGrid
+
+    return HouseOnGrid(house, GridSide(options.district, house.decl.name))
+
+
 WIRINGS = {
     "space_heating": Wiring(
         setpoints=_space_heating_setpoints, feed=_space_heating_feed,
@@ -134,4 +160,10 @@ WIRINGS = {
         heat="E_BC_kWh", model_heat="ground.Q_flow", flow="SFW_BC_l_per_min",
         signals=("ground.T_sup", "ground.T_ret", "ground.m_flow", "ground.Q_flow", "ground.T_ground",
                  "ground.T_undisturbed", "weather.T_air")),
+    "grid": Wiring(
+        setpoints=_grid_setpoints, feed=_grid_feed,
+        pairs=(("STM_TGVL_Set_degC", "STM_TGVL_degC"), ("SDP_TG_Set_bar", "SDP_TG_bar")),
+        heat="E_TG_kWh", model_heat="grid.Q_flow", flow="SFW_TG_l_per_min", boundary=_grid_boundary,
+        signals=("grid.T_sup", "grid.T_ret", "grid.dp", "grid.m_flow", "grid.T_return", "grid.Q_flow",
+                 "grid.Q_plant")),
 }

@@ -19,6 +19,7 @@ from gateway.device.refusal import Refusal
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from phil.benchmap import BenchMap, load_bench_map
 from phil.emulator.brine import BrineBench
+from phil.emulator.grid import GridBench
 from phil.emulator.model import BenchModel, read_params
 from phil.emulator.solar import SolarBench
 from phil.emulator.space_heating import SpaceHeatingBench
@@ -27,7 +28,7 @@ from plant.errors import ConfigError
 
 MODELS: dict[str, type[BenchModel]] = {
     "space_heating": SpaceHeatingBench, "tap_water": TapWaterBench, "solar": SolarBench,
-    "brine": BrineBench}
+    "brine": BrineBench, "grid": GridBench}
 
 
 class BenchDevice(Device):
