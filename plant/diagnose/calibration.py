@@ -139,7 +139,7 @@ def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
     return out
 
 
-def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
+def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT, jobs: int | None = 1) -> dict:
     """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
     window. -> report entry; its "overrides" (the fitted values and the storage scheme chosen)
     are what every later replay starts from (Replayer.with_calibration), its "params" those
@@ -196,10 +196,11 @@ def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT) -> dict:
                      "change_pct": 100.0 * (v / p.nominal - 1.0) if p.nominal else math.nan,
                      "bounds": [p.lo, p.hi], "unit": p.unit,
                      "at_bound": at_bound(p, v) and not (q.bounds is not None and v == p.nominal), "why": q.why})
+    evaluations = len(cache)  # the re-fit's own; the identifiability's are counted in its entry
     ident = identifiability(F, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
-                            theta, ctx.n_eff(ctx.train))
+                            theta, ctx.n_eff(ctx.train), jobs=jobs)
     return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
-            "evaluations": len(cache), "params": [p for p, q in zip(params, refit) if q.joint],
+            "evaluations": evaluations, "params": [p for p, q in zip(params, refit) if q.joint],
             "identifiability": ident, "storage_scheme": scheme, "overrides": _added(replayer, rp)}
 
 
@@ -254,33 +255,35 @@ MAX_SPAN = 0.5
 MAX_CORR = 0.95
 
 
-def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05) -> dict:
+def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05, jobs: int | None = 1) -> dict:
     """Local identifiability of a calibration at its optimum theta: the Hessian of the cost F in
     range-normalised coordinates (u = (v - lo) / (hi - lo)) by central differences (steps h,
     kept inside the range), the approximate covariance 2 J / n_eff * H^-1 as for every fitted
     parameter here, each parameter's 1-sigma span as a share of its range and the correlations.
+    The 1 + 2k^2 costs are independent replays: in up to `jobs` processes (parallel.map_forked).
     -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
     identifiable: bool, why}."""
+    from .parallel import map_forked
+
     k = len(theta)
     # the curvature is taken a step inside the range when the optimum lies on a bound (the
     # differences must stay where the model is defined)
     u0 = np.clip([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)], h, 1.0 - h)
     steps = np.full(k, h)
-
-    def G(u):
-        return F([a + x * (b - a) for x, a, b in zip(u, lo, hi)])
-
-    J = G(u0)
+    E = np.eye(k) * steps
+    points = [u0] + [u0 + s * E[i] for i in range(k) for s in (1, -1)]
+    points += [u0 + si * E[i] + sj * E[j] for i in range(k) for j in range(i) for si in (1, -1) for sj in (1, -1)]
+    values = map_forked(lambda n: F([a + x * (b - a) for x, a, b in zip(points[n], lo, hi)]), len(points), jobs)
+    G = iter(values)
+    J = next(G)
     H = np.zeros((k, k))
     for i in range(k):
-        e = np.zeros(k)
-        e[i] = steps[i]
-        H[i, i] = (G(u0 + e) - 2.0 * J + G(u0 - e)) / steps[i] ** 2
+        H[i, i] = (next(G) - 2.0 * J + next(G)) / steps[i] ** 2
+    for i in range(k):
         for j in range(i):
-            f = np.zeros(k)
-            f[j] = steps[j]
-            H[i, j] = H[j, i] = (G(u0 + e + f) - G(u0 + e - f) - G(u0 - e + f) + G(u0 - e - f)) / (4 * steps[i] * steps[j])
-    out = {"parameters": [], "correlations": {}, "identifiable": True, "why": ""}
+            pp, pm, mp, mm = next(G), next(G), next(G), next(G)
+            H[i, j] = H[j, i] = (pp - pm - mp + mm) / (4 * steps[i] * steps[j])
+    out = {"parameters": [], "correlations": {}, "identifiable": True, "why": "", "evaluations": len(points)}
     try:
         cov = np.linalg.inv(H) * 2.0 * J / max(n_eff, 1.0)
         ok = np.all(np.linalg.eigvalsh(H) > 0)

@@ -21,10 +21,8 @@ from . import fit
 _JOB: dict = {}
 
 
-def _fit_one(i: int):
-    j = _JOB
-    return dataclasses.replace(fit.fit_simulate(j["effects"][i], j["ctx"], j["rp"], j["J0t"], j["nominal"]),
-                               effect=None)
+def _call(i: int):
+    return _JOB["fn"](i)
 
 
 def default_jobs() -> int:
@@ -34,17 +32,26 @@ def default_jobs() -> int:
         return os.cpu_count() or 1
 
 
-def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
-    """fit.fit_simulate for each effect; in up to `jobs` forked processes."""
-    jobs = min(default_jobs() if jobs is None else max(1, int(jobs)), len(effects))
+def map_forked(fn, n: int, jobs: int | None = None) -> list:
+    """[fn(0), ..., fn(n - 1)], in up to `jobs` forked processes (fn and what it reads are
+    inherited, not pickled; what it returns is pickled back)."""
+    jobs = min(default_jobs() if jobs is None else max(1, int(jobs)), n)
     # fork copies only the calling thread: with other threads alive (a gateway in the same
-    # process) a lock they hold could never be released in the child, so fit here instead
+    # process) a lock they hold could never be released in the child, so run here instead
     if jobs <= 1 or "fork" not in multiprocessing.get_all_start_methods() or threading.active_count() > 1:
-        return [fit.fit_simulate(e, ctx, rp, J0t, nominal) for e in effects]
-    _JOB.update(effects=effects, ctx=ctx, rp=rp, J0t=J0t, nominal=nominal)
+        return [fn(i) for i in range(n)]
+    _JOB.update(fn=fn)
     try:
         with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("fork")) as pool:
-            out = list(pool.map(_fit_one, range(len(effects))))
+            return list(pool.map(_call, range(n)))
     finally:
         _JOB.clear()
+
+
+def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
+    """fit.fit_simulate for each effect; in up to `jobs` forked processes."""
+    def one(i):
+        return dataclasses.replace(fit.fit_simulate(effects[i], ctx, rp, J0t, nominal), effect=None)
+
+    out = map_forked(one, len(effects), jobs)
     return [dataclasses.replace(r, effect=e) for e, r in zip(effects, out)]

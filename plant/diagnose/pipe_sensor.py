@@ -209,9 +209,18 @@ def _fit(t, m, use, T_room, pairs) -> PipeFit:
     a grid step would make every replay's cost jump with it): tau alone by Brent within its grid
     neighbours where the pipe only runs or stands, else both together (Nelder-Mead, within the
     ranges: the two trade off, and one at a time stops short)."""
+    # the reading is causal: the samples after the last one scored change no cost. The cost is
+    # asked for a few hundred times per replay, so its arrays are prepared once
+    end = int(np.flatnonzero(use)[-1]) + 1
+    tf, mf, used = np.asarray(t[:end], float), np.nan_to_num(np.asarray(m[:end], float)), use[:end]
+    prepared = [(np.asarray(y[:end], float), y_m[:end]) for y, y_m in pairs]
+
     def sse(tau, mass):
-        f = PipeFit(tau, mass)
-        return sum(float(np.nansum(((y_m - cooled(t, y, m, f, T_room))[use]) ** 2)) for y, y_m in pairs)
+        if tau == AS_SIMULATED:
+            return sum(float(np.nansum(((y_m - y)[used]) ** 2)) for y, y_m in prepared)
+        decay = 0.0 if math.isinf(tau) else 1.0 / tau
+        return sum(float(np.nansum(((y_m - _reading(tf, y, mf, float(mass), decay, float(T_room)))[used]) ** 2))
+                   for y, y_m in prepared)
 
     moves = bool((m[use] > 0).any())   # a mass matters only where the pipe trickles
     masses = MASS_GRID if moves else MASS_GRID[:1]

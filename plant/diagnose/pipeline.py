@@ -73,9 +73,10 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
 
 
-def calibrate(p: Prepared, house: str, refit_nominal: bool, log) -> Baseline:
+def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | None = 1) -> Baseline:
     """The subsystems replayed alone calibrated on their own interfaces, the unit modes the twin
-    lacks masked, then the nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds)."""
+    lacks masked, then the nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds; its
+    identifiability's replays in up to `jobs` processes)."""
     ctx, rp = p.ctx, p.replayer
     radiator = rp.calibrate_radiator(ctx.train)
     calibrated = ()
@@ -96,7 +97,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log) -> Baseline:
     ctx = unit_modes.apply(ctx, modes)
     nref, ranges, nominal = {"parameters": [], "params": []}, {}, first
     if refit_nominal:
-        nref = calibration.refit_nominal(ctx, rp, house)
+        nref = calibration.refit_nominal(ctx, rp, house, jobs=jobs)
         rp = rp.with_calibration(nref["overrides"])
         ranges = calibration.ranges(nref)
         nominal = rp.run()
@@ -195,11 +196,12 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
              plots: bool = True, log=print, refit_nominal: bool = True, jobs: int | None = None,
              require_cut: bool = False) -> dict:
     """The diagnosis of recording `rec` against `house` -> report.json's content (written to `out`
-    with the plots when given). jobs: processes for the candidate fits (default: the CPUs this
-    process may use); require_cut: refuse a recording that allows no cut (cut.select)."""
+    with the plots when given). jobs: processes for the candidate fits and the calibration's
+    identifiability replays (default: the CPUs this process may use); require_cut: refuse a
+    recording that allows no cut (cut.select)."""
     timing = {}
     t0 = time.perf_counter()
-    base = calibrate(prepare(rec, house, train_days, require_cut), house, refit_nominal, log)
+    base = calibrate(prepare(rec, house, train_days, require_cut), house, refit_nominal, log, jobs)
     timing["replay_nominal"] = time.perf_counter() - t0
     t = time.perf_counter()
     loc = locate_mismatch(base)

@@ -44,7 +44,39 @@ class PlantRoom:
     source: str
 
 
+MEMO_BYTES = 256 * 2 ** 20  # plant rows kept for repeated drives (about 30 seven-day replays)
+ALONE_KEPT = 64  # subsystem replays kept (a few samples' columns each)
 MIN_CALIBRATION_SAMPLES = 30  # flowing samples a subsystem calibrated alone needs in the training window
+
+
+class Drives:
+    """The plant rows of earlier drives, by key, within a memory budget (MEMO_BYTES). When full,
+    the oldest entry never asked for again goes first: a candidate's nominal point is asked for
+    once per candidate, a hundred drives apart, and is worth keeping over a grid point of one
+    search."""
+
+    def __init__(self, budget: int | None = None):
+        self.budget = MEMO_BYTES if budget is None else budget
+        self._rows: dict = {}   # key -> rows, in insertion (age) order
+        self._hits: dict = {}
+        self.used = 0
+
+    def get(self, key):
+        rows = self._rows.get(key)
+        if rows is not None:
+            self._hits[key] += 1
+        return rows
+
+    def put(self, key, rows: np.ndarray) -> None:
+        rows.setflags(write=False)  # shared by every run that asks again: nobody may change it
+        while self._rows and self.used + rows.nbytes > self.budget:
+            old = next((k for k in self._rows if not self._hits[k]), next(iter(self._rows)))
+            self.used -= self._rows.pop(old).nbytes
+            del self._hits[old]
+        if rows.nbytes <= self.budget:
+            self._rows[key] = rows
+            self._hits[key] = 0
+            self.used += rows.nbytes
 
 
 class Replayer:
@@ -80,7 +112,11 @@ class Replayer:
                               + ("; the radiator circuit replayed alone (measured flow, supply and room "
                                  "-> return)" if self.radiator else ""))
         self._checked = False
-        self._cache: tuple | None = None
+        # the plant's rows by (overrides, samples), shared by the replayers with_calibration makes:
+        # a third of a diagnosis's drives repeat one already made (each candidate starts at the
+        # nominal point; the re-fit's descents return to earlier values)
+        self._drives = Drives()
+        self._subsystems: dict = {}  # the same for the subsystems replayed alone (_alone)
         # calibrated values (with_calibration): applied to every run; a run's own overrides take
         # precedence over them
         self.base: dict = {}
@@ -109,7 +145,6 @@ class Replayer:
             out.radiator_elements = radiator_elements
         if t_train is not None:
             out.t_train = t_train
-        out._cache = None
         return out
 
     def _layout(self) -> None:
@@ -209,8 +244,9 @@ class Replayer:
         from ..house import load_house
 
         key = (tuple(sorted((k, repr(v)) for k, v in ov.items())), n)
-        if self._cache is not None and self._cache[0] == key:
-            return self._cache[1]
+        hit = self._drives.get(key)
+        if hit is not None:
+            return hit
         house = load_house(self.plant_name, start=self.rec.start, controller="external", overrides=ov or None)
         if self.init_from_sensors:
             for name, value in zip(self.names, self.cmd[0]):
@@ -218,9 +254,20 @@ class Replayer:
                     house.set(name, value)
             self._init_storage(house)
         # commands and measured boundaries alike: a sample holds from the midpoints around it
-        rows = house.drive(self.t[:n], self.names, self.cmd[:n])
-        self._cache = (key, rows)
+        rows = house.drive(self.t[:n], self.names, self.cmd[:n])[:, self._src]
+        self._drives.put(key, rows)
         return rows
+
+    def _alone(self, prefix: str, sub_ov: dict, n: int, replay_fn, *args) -> dict:
+        """A subsystem replayed alone (replay_fn) with the overrides starting with `prefix`; the
+        same overrides give the same values, so most runs (a candidate elsewhere) reuse them."""
+        own = {k: v for k, v in sub_ov.items() if k.startswith(prefix)}
+        key = (prefix, tuple(sorted((k, repr(v)) for k, v in own.items())), n, args)
+        if key not in self._subsystems:
+            if len(self._subsystems) >= ALONE_KEPT:
+                del self._subsystems[next(iter(self._subsystems))]
+            self._subsystems[key] = replay_fn(self.rec, self.house_name, own, n, *args)
+        return self._subsystems[key]
 
     def run(self, overrides: dict | None = None, until: float | None = None) -> Replay:
         """The twin replayed at the recording's sample times (up to `until`), from the base
@@ -236,15 +283,15 @@ class Replayer:
                               f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
         rows_plant = self._plant(plant_ov, n)
         out = np.full((n, len(CATALOGUE)), np.nan)
-        out[:, self._dst] = rows_plant[:, self._src]
+        out[:, self._dst] = rows_plant
         for inp, sig in self.bound.items():
             out[:, CATALOGUE.index(sig)] = self.rec.data[sig][:n]
         if self.circuit:
-            for sig, v in cut_mod.replay_circuit(self.rec, self.house_name, sub_ov, n).items():
+            for sig, v in self._alone("mixer.", sub_ov, n, cut_mod.replay_circuit).items():
                 out[:, CATALOGUE.index(sig)] = v
         if self.radiator:
-            for sig, v in cut_mod.replay_radiator(self.rec, self.house_name, sub_ov, n,
-                                                            self.radiator_elements).items():
+            for sig, v in self._alone("radiator.", sub_ov, n, cut_mod.replay_radiator,
+                                      self.radiator_elements).items():
                 out[:, CATALOGUE.index(sig)] = v
         cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
