@@ -12,6 +12,7 @@ import time
 import numpy as np
 import pytest
 
+from phil.compare import compare
 from phil.emulator.server import BenchServer, make_model
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
@@ -99,6 +100,13 @@ def test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector(tmp_path):
                    "ground.T_sup", "ground.Q_flow", "brine.exchange_ms"):
         assert column in head
     assert abs(json.loads(out.strip().splitlines()[-1])["ledger"]["residual"]) < 1e-3
+    # twin phil compare: set vs measured; no house 3 simulated alone yet, said so (it crashed on
+    # a run without house 1's signals)
+    result = compare(tmp_path / "run")
+    [row] = result["interfaces"]["brine"]
+    assert row["set"] == "STM_BCRLaM_Set_degC" and row["rms"] < 0.5
+    assert "no house simulated alone for 'SF3'" in (tmp_path / "run" / "compare.md").read_text()
+    assert result["plots"] == ["compare_brine.png"]
 
 
 @pytest.mark.parametrize("fault", ["nan", "out_of_range", "stale"])
