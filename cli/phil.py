@@ -6,10 +6,6 @@ import argparse
 import json
 import signal
 
-# the PHIL house kinds live with the PHIL side (phil/kinds.py) and register with the house
-# compiler on import: every `twin` command then loads plant/houses/house3_phil.toml
-import phil.kinds  # noqa: F401,E402
-
 EXAMPLES = """examples:
   twin bench space_heating --modbus-tcp 127.0.0.1:5031 &
   twin phil house1 --bench space_heating=127.0.0.1:5031 --speed 1 --hours 24 --record runs/phil1

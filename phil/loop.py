@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import Any
 
 from gateway.clock import PacedClock
-from phil import kinds  # noqa: F401  (registers measured_ground_collector: house3_phil.toml)
 from phil.benchmap import BenchMap, load_bench_map
 from phil.master import BenchLink, ExchangeError
 from phil.served import ServedLink, SharedServer

@@ -16,7 +16,8 @@ simulated side the bench needs beside the house.
                  collector (solar.T_ret, solar.m_flow)
   brine          (SF3) the ground collector's brine outlet and ground temperature -> measured
                  brine from the lab's heat pump and its flow feed the collector (ground.T_ret,
-                 ground.m_flow; plant/houses/house3_phil.toml, phil/kinds.py)
+                 ground.m_flow; plant/houses/house3_phil.toml,
+                 plant/components/phil_boundary.py)
   grid           (a district house) the simulated grid's supply temperature and differential
                  pressure at the house's node -> measured grid flow and return of the lab's
                  substation are the house's draw on the grid (grid.m_flow, grid.T_return;

@@ -22,5 +22,5 @@ KINDS = {k.name: k for k in (
     pv.Kind(), solar_collector.Kind(), sensor.Kind(),
     heat_pump.BrineKind(), ground_collector.Kind(), floor_heating.Kind(),
     electric_heater.Kind(), substation.Kind(),
-    phil_boundary.DemandKind(), phil_boundary.SolarKind(),
+    phil_boundary.DemandKind(), phil_boundary.SolarKind(), phil_boundary.GroundKind(),
 )}

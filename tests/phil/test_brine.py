@@ -1,4 +1,4 @@
-"""SF3's brine interface: the measured ground collector (phil/kinds.py) against its formula and its
+"""SF3's brine interface: the measured ground collector (plant/components/phil_boundary.py) against its formula and its
 energy, the heat-pump source emulator within its limits, the closed loop over Modbus TCP on
 loopback (heat of the bench's meter against the simulated collector's), and bad input named with
 the interface."""
