@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import threading
-import time
 
 import numpy as np
 import pytest
@@ -17,7 +15,8 @@ from phil.emulator.server import BenchServer, make_model
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
 from plant.house import load_house
-from tests.phil.test_loop import _bench_process, _events, _rows, _stop
+from tests.phil.faults import assert_rejected_and_stopped, run_with_fault
+from tests.phil.test_loop import _bench_process, _rows, _stop
 
 CP = 4180.0
 
@@ -115,35 +114,18 @@ def test_bad_brine_measurement_is_named_and_the_run_stops_with_safe_setpoints(tm
     map's range) and a bench PLC that stops answering (stale): rejected with the interface named,
     the last good value held and flagged, then the safe set-points and a clean stop."""
     server = BenchServer("brine", speed=100.0).start()
-    try:
-        loop = PhilLoop("house3", {"brine": ("127.0.0.1", server.port)},
-                        PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
-                                    record=tmp_path / "run", stale_s=0.3, stop_s=1.0, timeout_s=0.1, retries=0))
-
-        def inject():
-            time.sleep(1.0)
-            if fault == "nan":
-                server.device.inject_sensor_fault("STM_BCVL_degC", "open")
-            elif fault == "out_of_range":
-                server.device.inject_sensor_fault("STM_BCVL_degC", "drift", 100.0)
-            else:
-                server.transport.stop()          # the PLC's server is gone: connection refused
-        threading.Thread(target=inject, daemon=True).start()
-        report = loop.run()
-        time.sleep(0.1)
-        inputs = dict(server.model.inputs)
-    finally:
-        server.stop()
+    loop = PhilLoop("house3", {"brine": ("127.0.0.1", server.port)},
+                    PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
+                                record=tmp_path / "run", stale_s=0.3, stop_s=1.0, timeout_s=0.1, retries=0))
+    # stale: the PLC's server is gone (connection refused)
+    action = {"nan": "open", "out_of_range": "drift", "stale": "stop"}[fault]
+    report, inputs = run_with_fault(server, loop, action, "STM_BCVL_degC")
     assert "brine." in report["stop_reason"] and "no good value" in report["stop_reason"]
-    rejected = [e for e in _events(tmp_path / "run") if e["kind"] == "rejected"]
-    assert rejected and all(e["device"] == "brine" for e in rejected)
     reason = {"nan": "NaN", "out_of_range": "out of range", "stale": "connection"}[fault]
-    assert any(reason in e["reason"] and e["point"] == "STM_BCVL_degC" for e in rejected)
-    assert any(e["reason"].startswith("stale") for e in rejected)
+    events = assert_rejected_and_stopped(tmp_path / "run", "brine", "STM_BCVL_degC", reason)
+    assert any(e["reason"].startswith("stale") for e in events if e["kind"] == "rejected")
     if fault != "stale":        # the bench still answers: it got the safe set-points
         assert inputs["T_set"] == 10.0 and inputs["T_ground"] == 10.0
     head, rows = _rows(tmp_path / "run")
-    flag, used = head.index("brine.STM_BCVL_degC.flag"), head.index("brine.STM_BCVL_degC.used")
-    assert rows[-1][flag] == "1" and len(rows[-1]) == len(head)
+    used = head.index("brine.STM_BCVL_degC.used")
     assert -20.0 < float(rows[-1][used]) < 40.0              # the last good value, held
-    assert _events(tmp_path / "run")[-1]["kind"] == "stop"

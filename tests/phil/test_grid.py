@@ -5,8 +5,6 @@ the interface."""
 from __future__ import annotations
 
 import json
-import threading
-import time
 
 import numpy as np
 import pytest
@@ -16,7 +14,8 @@ from phil.grid import DP_PLANT, GridSide
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
 from plant.water import CP
-from tests.phil.test_loop import _bench_process, _events, _rows, _stop
+from tests.phil.faults import assert_rejected_and_stopped, run_with_fault
+from tests.phil.test_loop import _bench_process, _rows, _stop
 
 
 def test_grid_side_books_the_measured_draw_and_closes():
@@ -105,36 +104,15 @@ def test_bad_grid_measurement_is_named_and_the_run_stops_with_safe_setpoints(tmp
     emulator's PLC answering with exception 04 until the run gives up (stale): each rejected with
     the interface named, the last good value held and flagged; safe set-points, clean stop."""
     server = BenchServer("grid", speed=100.0).start()
-    try:
-        loop = PhilLoop("house1", {"grid": ("127.0.0.1", server.port)},
-                        PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
-                                    record=tmp_path / "run", stale_s=0.3, stop_s=1.0))
-
-        def inject():
-            time.sleep(1.0)
-            if fault == "nan":
-                server.device.inject_sensor_fault("STM_TGRL_degC", "open")
-            elif fault == "out_of_range":
-                server.device.inject_sensor_fault("STM_TGRL_degC", "drift", 100.0)
-            else:
-                server.fail()
-                time.sleep(1.6)      # past stop_s: the loop gives up; the PLC recovers
-                server.fail(False)
-        threading.Thread(target=inject, daemon=True).start()
-        report = loop.run()
-        time.sleep(0.1)
-        inputs = dict(server.model.inputs)
-    finally:
-        server.stop()
+    loop = PhilLoop("house1", {"grid": ("127.0.0.1", server.port)},
+                    PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
+                                record=tmp_path / "run", stale_s=0.3, stop_s=1.0))
+    # stale: exception 04 past stop_s (the loop gives up), then the PLC recovers
+    action = {"nan": "open", "out_of_range": "drift", "stale": "fail"}[fault]
+    report, inputs = run_with_fault(server, loop, action, "STM_TGRL_degC")
     assert "grid." in report["stop_reason"] and "no good value" in report["stop_reason"]
-    rejected = [e for e in _events(tmp_path / "run") if e["kind"] == "rejected"]
-    assert rejected and all(e["device"] == "grid" for e in rejected)
     reason = {"nan": "NaN", "out_of_range": "out of range", "stale": "exception: exception 04"}[fault]
-    assert any(reason in e["reason"] and e["point"] == "STM_TGRL_degC" for e in rejected)
-    assert any(e["reason"].startswith("stale") for e in rejected)
+    events = assert_rejected_and_stopped(tmp_path / "run", "grid", "STM_TGRL_degC", reason)
+    assert any(e["reason"].startswith("stale") for e in events if e["kind"] == "rejected")
     if fault != "stale":
         assert inputs["T_sup_set"] == 30.0 and inputs["dp_set"] == 0.0      # safe set-points
-    head, rows = _rows(tmp_path / "run")
-    flag = head.index("grid.STM_TGRL_degC.flag")
-    assert rows[-1][flag] == "1" and len(rows[-1]) == len(head)
-    assert _events(tmp_path / "run")[-1]["kind"] == "stop"

@@ -2,7 +2,6 @@
 agreement, a bench that cannot follow, and bad input (stale, out of range, exceptions)."""
 from __future__ import annotations
 
-import csv
 import json
 import os
 import re
@@ -19,6 +18,7 @@ from phil.emulator.server import BenchServer
 from phil.benchmap import load_bench_map
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
+from tests.phil.faults import events as _events, rows as _rows, run_with_fault
 
 ROOT = Path(__file__).resolve().parents[2]
 # 150x real time at 2 s steps: 13 ms a step for the exchange and the model (median ~1 ms on a
@@ -41,11 +41,6 @@ def _stop(*procs: subprocess.Popen) -> list[str]:
     for proc in procs:
         proc.send_signal(signal.SIGTERM)
     return [proc.communicate(timeout=30)[0] for proc in procs]
-
-
-def _rows(run: Path) -> tuple[list[str], list[list[str]]]:
-    rows = list(csv.reader((run / "signals.csv").open()))
-    return rows[0], rows[1:]
 
 
 def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
@@ -122,29 +117,12 @@ def _loop(server, tmp_path, **kw):
     return PhilLoop("house1", {"space_heating": ("127.0.0.1", server.port)}, PhilOptions(**opts))
 
 
-def _events(run: Path) -> list[dict]:
-    return list(csv.DictReader((run / "events.csv").open()))
-
-
 @pytest.mark.parametrize("fault", ["out_of_range", "exception"])
 def test_bad_bench_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, fault):
     server = BenchServer("space_heating", speed=100.0).start()
-    try:
-        loop = _loop(server, tmp_path)
-        def inject():
-            time.sleep(1.5)
-            if fault == "out_of_range":
-                server.device.inject_sensor_fault("STM_HCRL_degC", "open")   # serves 327.67 degC
-            else:
-                server.fail()
-                time.sleep(1.6)     # past stop_s: the loop gives up; the PLC recovers
-                server.fail(False)
-        threading.Thread(target=inject, daemon=True).start()
-        report = loop.run()
-        time.sleep(0.1)
-        inputs = dict(server.model.inputs)
-    finally:
-        server.stop()
+    # out of range: the scaled register of an open sensor serves 327.67 degC
+    report, inputs = run_with_fault(server, _loop(server, tmp_path), "open" if fault == "out_of_range" else "fail",
+                                    "STM_HCRL_degC", after=1.5)
     b = report["benches"]["space_heating"]
     assert "space_heating.STM_HCRL_degC" in report["stop_reason"]  or fault == "exception"
     events = _events(tmp_path / "run")
