@@ -50,9 +50,29 @@ def _hint(bad: str, names, what: str) -> str:
 
 
 def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> Declaration:
-    from .kinds import KINDS
-
     problems: list[str] = []
+    _apply_overrides(doc, overrides, problems)
+    house = doc.get("house", {})
+    _check_house(house, path, text, problems)
+    typeday, kwh, litres, dhw_series = _profiles(doc.get("profiles", {}), path, text, problems)
+    instances: dict[str, Instance] = {}
+    for order, (name, table) in enumerate(doc.items()):
+        if name in ("house", "profiles"):
+            continue
+        inst = _instance(name, table, order, path, text, problems)
+        if inst is not None:
+            instances[name] = inst
+    _check_links(instances, path, text, problems)
+    decl = Declaration(name=house.get("name", path.stem), path=path,
+                       description=str(house.get("description", "")),
+                       start=str(house.get("start", "2021-01-01")),
+                       household_kwh_per_year=float(kwh) if isinstance(kwh, (int, float)) else 0.0,
+                       dhw_litres_per_day=float(litres) if isinstance(litres, (int, float)) else 0.0,
+                       typeday=typeday, instances=instances, problems=problems, dhw_series=dhw_series)
+    return decl
+
+
+def _apply_overrides(doc: dict, overrides: dict | None, problems: list) -> None:
     for dotted, value in (overrides or {}).items():
         parts = dotted.split(".")
         if len(parts) < 2 or not isinstance(doc.get(parts[0], {}), dict):
@@ -62,14 +82,20 @@ def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> De
         for part in parts[1:-1]:
             target = target.setdefault(part, {})
         target[parts[-1]] = value
-    house = doc.get("house", {})
+
+
+def _check_house(house: dict, path: Path, text: str, problems: list) -> None:
     for key in house:
         if key not in HOUSE_KEYS:
             problems.append(f"{path}:{line_of(text, 'house', key)} [house] {key}: unknown; "
                             + _hint(key, HOUSE_KEYS, "allowed"))
     if "name" not in house:
         problems.append(f"{path}:{line_of(text, 'house')} [house] name: missing; add name = \"{path.stem}\"")
-    prof = doc.get("profiles", {})
+
+
+def _profiles(prof: dict, path: Path, text: str, problems: list) -> tuple:
+    """(typeday, household kWh/year, DHW l/day, DHW series) of [profiles]; a bad typeday or series
+    falls back to its default so the rest of the file is still checked."""
     for key in prof:
         if key not in PROFILE_KEYS:
             problems.append(f"{path}:{line_of(text, 'profiles', key)} [profiles] {key}: unknown; "
@@ -92,62 +118,66 @@ def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> De
         problems.append(f"{path}:{line_of(text, 'profiles', 'dhw_series')} [profiles] dhw_series = "
                         f"{dhw_series!r}: unknown; the shipped DHWcalc series: {', '.join(DHW_SERIES)}")
         dhw_series = "SF1"
-    instances: dict[str, Instance] = {}
-    for order, (name, table) in enumerate(doc.items()):
-        if name in ("house", "profiles"):
+    return typeday, kwh, litres, dhw_series
+
+
+def _instance(name: str, table, order: int, path: Path, text: str, problems: list) -> Instance | None:
+    """The instance of one table, or None when its kind is missing or unknown (nothing more of
+    it can be checked)."""
+    from .kinds import KINDS
+
+    where = f"{path}:{line_of(text, name)} [{name}]"
+    if not isinstance(table, dict):
+        problems.append(f"{path}:{line_of(text, name)} {name}: must be a table [{name}] with a kind")
+        return None
+    kind = table.get("kind")
+    if kind is None:
+        problems.append(f"{where} kind: missing; add kind = \"...\" ("
+                        + _hint(name, KINDS, "known kinds") + ")")
+        return None
+    if kind not in KINDS or kind == "profiles":
+        problems.append(f"{path}:{line_of(text, name, 'kind')} [{name}] kind = {kind!r}: unknown; "
+                        + _hint(kind, [k for k in KINDS if k != "profiles"], "known kinds"))
+        return None
+    k = KINDS[kind]
+    values, options = _values_and_options(name, kind, k, table, where, path, text, problems)
+    params = None
+    if k.Params is not None:
+        try:
+            params = build_params(k.Params, values, f"[{name}]")
+        except ConfigError as exc:
+            for msg in str(exc).splitlines():
+                key = msg.split("] ", 1)[1].split(" ", 1)[0] if "] " in msg else None
+                problems.append(f"{path}:{line_of(text, name, key)} {msg}")
+    return Instance(name, kind, params, options, where, order,
+                    {key: line_of(text, name, key) for key in table})
+
+
+def _values_and_options(name: str, kind: str, k, table: dict, where: str, path: Path, text: str,
+                        problems: list) -> tuple[dict, dict]:
+    """A table's keys sorted into parameter values and links; a missing required link is None,
+    a missing optional one its default."""
+    links = dict(k.LINKS)
+    pnames = [f.name for f in fields(k.Params)] if k.Params else []
+    values, options = {}, {}
+    for key, v in table.items():
+        if key == "kind":
             continue
-        where = f"{path}:{line_of(text, name)} [{name}]"
-        if not isinstance(table, dict):
-            problems.append(f"{path}:{line_of(text, name)} {name}: must be a table [{name}] with a kind")
-            continue
-        kind = table.get("kind")
-        if kind is None:
-            problems.append(f"{where} kind: missing; add kind = \"...\" ("
-                            + _hint(name, KINDS, "known kinds") + ")")
-            continue
-        if kind not in KINDS or kind == "profiles":
-            problems.append(f"{path}:{line_of(text, name, 'kind')} [{name}] kind = {kind!r}: unknown; "
-                            + _hint(kind, [k for k in KINDS if k != "profiles"], "known kinds"))
-            continue
-        k = KINDS[kind]
-        links = dict(k.LINKS)
-        pnames = [f.name for f in fields(k.Params)] if k.Params else []
-        values, options = {}, {}
-        for key, v in table.items():
-            if key == "kind":
-                continue
-            if key in links:
-                options[key] = v
-            elif key in pnames:
-                values[key] = v
+        if key in links:
+            options[key] = v
+        elif key in pnames:
+            values[key] = v
+        else:
+            problems.append(f"{path}:{line_of(text, name, key)} [{name}] {key}: not a parameter or link "
+                            f"of a {kind}; " + _hint(key, pnames + list(links), "allowed"))
+    for key, (default, meaning) in links.items():
+        if key not in options:
+            if default is REQUIRED:
+                problems.append(f"{where} {key}: missing; a {kind} needs it ({meaning})")
+                options[key] = None
             else:
-                problems.append(f"{path}:{line_of(text, name, key)} [{name}] {key}: not a parameter or link "
-                                f"of a {kind}; " + _hint(key, pnames + list(links), "allowed"))
-        for key, (default, meaning) in links.items():
-            if key not in options:
-                if default is REQUIRED:
-                    problems.append(f"{where} {key}: missing; a {kind} needs it ({meaning})")
-                    options[key] = None
-                else:
-                    options[key] = default
-        params = None
-        if k.Params is not None:
-            try:
-                params = build_params(k.Params, values, f"[{name}]")
-            except ConfigError as exc:
-                for msg in str(exc).splitlines():
-                    key = msg.split("] ", 1)[1].split(" ", 1)[0] if "] " in msg else None
-                    problems.append(f"{path}:{line_of(text, name, key)} {msg}")
-        instances[name] = Instance(name, kind, params, options, where, order,
-                                   {key: line_of(text, name, key) for key in table})
-    _check_links(instances, path, text, problems)
-    decl = Declaration(name=house.get("name", path.stem), path=path,
-                       description=str(house.get("description", "")),
-                       start=str(house.get("start", "2021-01-01")),
-                       household_kwh_per_year=float(kwh) if isinstance(kwh, (int, float)) else 0.0,
-                       dhw_litres_per_day=float(litres) if isinstance(litres, (int, float)) else 0.0,
-                       typeday=typeday, instances=instances, problems=problems, dhw_series=dhw_series)
-    return decl
+                options[key] = default
+    return values, options
 
 
 def _check_links(instances: dict, path: Path, text: str, problems: list) -> None:
