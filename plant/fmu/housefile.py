@@ -62,11 +62,27 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
         [parameters]               # FMU parameters: name = value or { value = ..., unit = "degC" }
         use_builtin_controller = false
     """
-    from ..catalogue import CATALOGUE
-    from .component import SOLVERS, UNITS
-
     problems: list[str] = []
     house = doc["house"]
+    _check_sections_and_keys(doc, house, path, text, problems)
+    name = house.get("name")
+    if not isinstance(name, str) or not name:
+        problems.append(f"{path}:{line_of(text, 'house', 'name')} [house] name: missing; add e.g. name = \"house1\" "
+                        "(device maps bind to the house of that name)")
+    fmu_path = _fmu_path(house, path, text, problems)
+    solver, numbers = _solver(house, path, text, problems)
+    bindings = _bindings(doc, path, text, problems)
+    params = _parameters(doc, path, text, problems)
+    if problems:
+        raise ConfigError("\n".join(problems))
+    return FmuHouseSpec(name=name, path=path, description=str(house.get("description", "")),
+                        start=str(house.get("start", "")), fmu=fmu_path, bindings=bindings,
+                        parameters=params, solver=solver, step_size=numbers.get("step_size"),
+                        relative_tolerance=numbers.get("relative_tolerance", 1e-6),
+                        max_step=numbers.get("max_step"))
+
+
+def _check_sections_and_keys(doc: dict, house: dict, path: Path, text: str, problems: list) -> None:
     for section in doc:
         if section not in ("house", "bindings", "parameters"):
             problems.append(f"{path}:{line_of(text, section)} [{section}]: not used when the plant is an FMU "
@@ -77,10 +93,10 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
             problems.append(f"{path}:{line_of(text, 'house', key)} [house] {key}: unknown for an FMU plant; "
                             + (f"did you mean {', '.join(close)}?" if close else
                                f"allowed: {', '.join(sorted(FMU_HOUSE_KEYS))}"))
-    name = house.get("name")
-    if not isinstance(name, str) or not name:
-        problems.append(f"{path}:{line_of(text, 'house', 'name')} [house] name: missing; add e.g. name = \"house1\" "
-                        "(device maps bind to the house of that name)")
+
+
+def _fmu_path(house: dict, path: Path, text: str, problems: list) -> Path | None:
+    """The .fmu file, relative to the house file unless absolute; None when it is not a string."""
     fmu = house.get("fmu")
     fmu_path = None
     where = f"{path}:{line_of(text, 'house', 'fmu')} [house] fmu"
@@ -90,6 +106,13 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
         fmu_path = Path(fmu) if Path(fmu).is_absolute() else path.parent / fmu
         if not fmu_path.is_file():
             problems.append(f"{where} = {fmu!r}: no such file ({fmu_path})")
+    return fmu_path
+
+
+def _solver(house: dict, path: Path, text: str, problems: list) -> tuple:
+    """(solver, {step_size, relative_tolerance, max_step: the valid ones as floats})."""
+    from .component import SOLVERS
+
     solver = house.get("solver")
     if solver is not None and solver not in SOLVERS:
         problems.append(f"{path}:{line_of(text, 'house', 'solver')} [house] solver = {solver!r}: unknown; "
@@ -109,6 +132,14 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
     if solver is None and ("step_size" in numbers or "relative_tolerance" in numbers):
         problems.append(f"{path}:{line_of(text, 'house')} [house]: step_size / relative_tolerance apply to a "
                         "model-exchange solver only; add solver = \"CVode\" or \"Euler\"")
+    return solver, numbers
+
+
+def _bindings(doc: dict, path: Path, text: str, problems: list) -> dict:
+    """[bindings]: catalogue signal -> (FMU variable, its unit or None), the valid entries only."""
+    from ..catalogue import CATALOGUE
+    from .component import UNITS
+
     bindings_doc = doc.get("bindings")
     bindings = {}
     if not isinstance(bindings_doc, dict) or not bindings_doc:
@@ -138,6 +169,13 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
                             f"signal's {ours!r} ({UNITS[ours][0] if ours in UNITS else 'no conversions'})")
             continue
         bindings[signal] = (var, unit)
+    return bindings
+
+
+def _parameters(doc: dict, path: Path, text: str, problems: list) -> dict:
+    """[parameters]: FMU variable -> (value, unit or None), the valid entries only."""
+    from .component import UNITS
+
     params = {}
     parameters = doc.get("parameters", {})
     if not isinstance(parameters, dict):
@@ -156,10 +194,4 @@ def _fmu_house(doc: dict, path: Path, text: str) -> FmuHouseSpec:
             problems.append(f"{loc}: unit {unit!r} unknown; known: {', '.join(sorted(u for u in UNITS if u))}")
             continue
         params[pname] = (value, unit)
-    if problems:
-        raise ConfigError("\n".join(problems))
-    return FmuHouseSpec(name=name, path=path, description=str(house.get("description", "")),
-                        start=str(house.get("start", "")), fmu=fmu_path, bindings=bindings,
-                        parameters=params, solver=solver, step_size=numbers.get("step_size"),
-                        relative_tolerance=numbers.get("relative_tolerance", 1e-6),
-                        max_step=numbers.get("max_step"))
+    return params
