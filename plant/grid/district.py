@@ -119,6 +119,41 @@ def resolve_district(name_or_path: str | Path) -> Path:
     raise ConfigError(f"district {str(name_or_path)!r}: no such file; shipped districts: {', '.join(shipped())}")
 
 
+class _Reader:
+    """The district file being read, and the problems found in it so far."""
+
+    def __init__(self, path: Path, text: str, doc: dict):
+        self.path, self.text, self.doc = path, text, doc
+        self.problems: list[str] = []
+
+    def where(self, section: str, key: str | None = None) -> str:
+        return f"{self.path}:{line_of(self.text, section, key)}"
+
+    def table(self, name: str, required: bool) -> dict:
+        t = self.doc.get(name, {})
+        if required and name not in self.doc:
+            self.problems.append(f"{self.path}: [{name}] missing; add it (see plant/grid/district.py)")
+        if not isinstance(t, dict):
+            self.problems.append(f"{self.where(name)}: [{name}] must be a table")
+            return {}
+        return t
+
+    def unknown(self, section: str, t: dict, allowed: set) -> None:
+        for k in t:
+            if k not in allowed:
+                close = difflib.get_close_matches(k, sorted(allowed), 1)
+                hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(sorted(allowed))}"
+                self.problems.append(f"{self.where(section, k)}: [{section}] {k}: unknown key; {hint}")
+
+    def number(self, section: str, t: dict, key: str, default: float, lo: float, hi: float) -> float:
+        v = t.get(key, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
+            self.problems.append(f"{self.where(section, key)}: [{section}] {key} = {v!r}: must be a number in "
+                                 f"[{lo}, {hi}]")
+            return default
+        return float(v)
+
+
 def load_district(name_or_path: str | Path) -> District:
     path = resolve_district(name_or_path)
     text = path.read_text()
@@ -126,125 +161,116 @@ def load_district(name_or_path: str | Path) -> District:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML: {exc}") from None
-    problems: list[str] = []
-
-    def where(section: str, key: str | None = None) -> str:
-        return f"{path}:{line_of(text, section, key)}"
-
-    def table(name: str, required: bool) -> dict:
-        t = doc.get(name, {})
-        if required and name not in doc:
-            problems.append(f"{path}: [{name}] missing; add it (see plant/grid/district.py)")
-        if not isinstance(t, dict):
-            problems.append(f"{where(name)}: [{name}] must be a table")
-            return {}
-        return t
-
-    def unknown(section: str, t: dict, allowed: set) -> None:
-        for k in t:
-            if k not in allowed:
-                close = difflib.get_close_matches(k, sorted(allowed), 1)
-                hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(sorted(allowed))}"
-                problems.append(f"{where(section, k)}: [{section}] {k}: unknown key; {hint}")
-
-    def number(section: str, t: dict, key: str, default: float, lo: float, hi: float) -> float:
-        v = t.get(key, default)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not lo <= v <= hi:
-            problems.append(f"{where(section, key)}: [{section}] {key} = {v!r}: must be a number in [{lo}, {hi}]")
-            return default
-        return float(v)
-
+    r = _Reader(path, text, doc)
     for top in doc:
         if top not in ("district", "plant", "grid", "pipes", "houses"):
             close = difflib.get_close_matches(top, ["district", "plant", "grid", "pipes", "houses"], 1)
-            problems.append(f"{where(top)}: [{top}]: unknown table" + (f"; did you mean [{close[0]}]?" if close else ""))
-    d = table("district", True)
-    unknown("district", d, KEYS["district"])
-    step = number("district", d, "step", 60.0, 1.0, 3600.0)
-    T_env = number("district", d, "T_env", 10.0, -30.0, 40.0)
-    port_base = int(number("district", d, "modbus_port_base", 5020, 1024, 65000))
-    plant = table("plant", True)
-    unknown("plant", plant, KEYS["plant"])
-    grid = table("grid", False)
-    unknown("grid", grid, KEYS["grid"])
+            r.problems.append(f"{r.where(top)}: [{top}]: unknown table" + (f"; did you mean [{close[0]}]?" if close else ""))
+    d = r.table("district", True)
+    r.unknown("district", d, KEYS["district"])
+    step = r.number("district", d, "step", 60.0, 1.0, 3600.0)
+    T_env = r.number("district", d, "T_env", 10.0, -30.0, 40.0)
+    port_base = int(r.number("district", d, "modbus_port_base", 5020, 1024, 65000))
+    plant = r.table("plant", True)
+    r.unknown("plant", plant, KEYS["plant"])
+    grid = r.table("grid", False)
+    r.unknown("grid", grid, KEYS["grid"])
     plant_node = plant.get("node", "plant")
+    pipes, nodes, parents = _pipes(r, plant_node)
+    _check_tree(r, plant_node, pipes, nodes, parents)
+    houses = []
+    for name, t in (doc.get("houses") or {}).items():
+        entry = _house(r, name, t, nodes)
+        if entry is not None:
+            houses.append(entry)
+    if not houses:
+        r.problems.append(f"{path}: no [houses.<name>] table; a district needs at least one house")
+    if r.problems:
+        raise ConfigError(f"district file {path}: {len(r.problems)} problem(s):\n  " + "\n  ".join(r.problems))
+    spec = GridSpec(plant_node, tuple(nodes), tuple(pipes), {h.name: h.node for h in houses},
+                    r.number("plant", plant, "T_supply", 70.0, 0.0, 150.0),
+                    r.number("plant", plant, "T_return", 40.0, 0.0, 150.0),
+                    r.number("grid", grid, "T_init_supply", 60.0, 0.0, 150.0),
+                    r.number("grid", grid, "T_init_return", 40.0, 0.0, 150.0), T_env,
+                    r.number("grid", grid, "node_volume", 0.05, 1e-4, 100.0))
+    return District(path, str(d.get("name", path.stem)), str(d.get("start", "2021-01-10")), step,
+                    tuple(houses), spec, port_base, str(d.get("description", "")))
+
+
+def _pipes(r: _Reader, plant_node: str) -> tuple[list, list, dict]:
+    """(pipes, nodes from the plant's on, node -> the first pipe into it) of [pipes.*]."""
     pipes, nodes, parents = [], [plant_node], {}
-    for name, p in (doc.get("pipes") or {}).items():
+    for name, p in (r.doc.get("pipes") or {}).items():
         sec = f"pipes.{name}"
         if not isinstance(p, dict):
-            problems.append(f"{where(sec)}: [{sec}] must be a table")
+            r.problems.append(f"{r.where(sec)}: [{sec}] must be a table")
             continue
-        unknown(sec, p, KEYS["pipe"])
+        r.unknown(sec, p, KEYS["pipe"])
         a, b = p.get("from"), p.get("to")
         if not isinstance(a, str) or not isinstance(b, str):
-            problems.append(f"{where(sec)}: [{sec}] needs from = \"node\" and to = \"node\" (from nearer the plant)")
+            r.problems.append(f"{r.where(sec)}: [{sec}] needs from = \"node\" and to = \"node\" (from nearer the plant)")
             continue
         if b in parents:
-            problems.append(f"{where(sec, 'to')}: [{sec}] to = {b!r}: node already fed by pipe {parents[b]!r}; "
-                            f"the grid must be a tree from the plant (one pipe into each node)")
+            r.problems.append(f"{r.where(sec, 'to')}: [{sec}] to = {b!r}: node already fed by pipe {parents[b]!r}; "
+                              f"the grid must be a tree from the plant (one pipe into each node)")
         if b == plant_node:
-            problems.append(f"{where(sec, 'to')}: [{sec}] to = {b!r} is the plant's node; write the pipe from it")
+            r.problems.append(f"{r.where(sec, 'to')}: [{sec}] to = {b!r} is the plant's node; write the pipe from it")
         parents.setdefault(b, name)
         for n in (a, b):
             if n not in nodes:
                 nodes.append(n)
-        pipes.append(PipeSpec(name, a, b, number(sec, p, "length", 20.0, 0.1, 1e5),
-                              number(sec, p, "diameter", 0.1, 0.005, 2.0), number(sec, p, "U", 0.19, 0.0, 100.0),
-                              number(sec, p, "roughness", 1e-4, 0.0, 0.01),
-                              number(sec, p, "wall_capacity", 0.0, 0.0, 1e9), number(sec, p, "wall_share_b", 0.5, 0.0, 1.0),
-                              number(sec, p, "dispersion", 0.0, 0.0, 10.0)))
-    # every node must hang from the plant
+        pipes.append(PipeSpec(name, a, b, r.number(sec, p, "length", 20.0, 0.1, 1e5),
+                              r.number(sec, p, "diameter", 0.1, 0.005, 2.0), r.number(sec, p, "U", 0.19, 0.0, 100.0),
+                              r.number(sec, p, "roughness", 1e-4, 0.0, 0.01),
+                              r.number(sec, p, "wall_capacity", 0.0, 0.0, 1e9),
+                              r.number(sec, p, "wall_share_b", 0.5, 0.0, 1.0),
+                              r.number(sec, p, "dispersion", 0.0, 0.0, 10.0)))
+    return pipes, nodes, parents
+
+
+def _check_tree(r: _Reader, plant_node: str, pipes: list, nodes: list, parents: dict) -> None:
+    """Every node must hang from the plant."""
     for n in nodes:
         seen, m = set(), n
         while m != plant_node and m in parents and m not in seen:
             seen.add(m)
             m = next(p.a for p in pipes if p.name == parents[m])
         if m != plant_node:
-            problems.append(f"{path}: node {n!r} is not connected to the plant's node {plant_node!r} "
-                            f"(or lies on a loop); add a pipe from a node nearer the plant")
-    houses = []
-    for name, h in (doc.get("houses") or {}).items():
-        sec = f"houses.{name}"
-        if not isinstance(h, dict):
-            problems.append(f"{where(sec)}: [{sec}] must be a table")
-            continue
-        unknown(sec, h, KEYS["house"])
-        file = h.get("file", name)
-        try:
-            fp = resolve(path.parent / file) if str(file).endswith(".toml") else resolve(file)
-        except ConfigError as exc:
-            problems.append(f"{where(sec, 'file')}: [{sec}] file = {file!r}: {exc}")
-            fp = Path(str(file))
-        node = h.get("node")
-        if node not in nodes:
-            close = difflib.get_close_matches(str(node), nodes, 1)
-            problems.append(f"{where(sec, 'node')}: [{sec}] node = {node!r}: not a node of the grid"
-                            + (f"; did you mean {close[0]!r}?" if close else f"; nodes: {', '.join(nodes)}"))
-        sub, ctl = h.get("substation", "rules"), h.get("controller", "built-in")
-        if sub not in SUBSTATION:
-            problems.append(f"{where(sec, 'substation')}: [{sec}] substation = {sub!r}: allowed {', '.join(SUBSTATION)}")
-        if ctl not in CONTROLLER:
-            problems.append(f"{where(sec, 'controller')}: [{sec}] controller = {ctl!r}: allowed {', '.join(CONTROLLER)}")
-        ov = h.get("overrides", {})
-        if not isinstance(ov, dict):
-            problems.append(f"{where(sec, 'overrides')}: [{sec}] overrides must be a table of \"instance.key\" = value")
-            ov = {}
-        port = int(number(sec, h, "modbus_port", 0, 0, 65535))
-        bus = h.get("can", "")
-        if not isinstance(bus, str):
-            problems.append(f"{where(sec, 'can')}: [{sec}] can = {bus!r}: a bus spec such as "
-                            f"\"socketcand:127.0.0.1:29536:can0\" or \"socketcan:can0\"")
-            bus = ""
-        houses.append(HouseEntry(name, fp, str(node), sub, ctl, dict(ov), port, bus))
-    if not houses:
-        problems.append(f"{path}: no [houses.<name>] table; a district needs at least one house")
-    if problems:
-        raise ConfigError(f"district file {path}: {len(problems)} problem(s):\n  " + "\n  ".join(problems))
-    spec = GridSpec(plant_node, tuple(nodes), tuple(pipes), {h.name: h.node for h in houses},
-                    number("plant", plant, "T_supply", 70.0, 0.0, 150.0),
-                    number("plant", plant, "T_return", 40.0, 0.0, 150.0),
-                    number("grid", grid, "T_init_supply", 60.0, 0.0, 150.0),
-                    number("grid", grid, "T_init_return", 40.0, 0.0, 150.0), T_env,
-                    number("grid", grid, "node_volume", 0.05, 1e-4, 100.0))
-    return District(path, str(d.get("name", path.stem)), str(d.get("start", "2021-01-10")), step,
-                    tuple(houses), spec, port_base, str(d.get("description", "")))
+            r.problems.append(f"{r.path}: node {n!r} is not connected to the plant's node {plant_node!r} "
+                              f"(or lies on a loop); add a pipe from a node nearer the plant")
+
+
+def _house(r: _Reader, name: str, h, nodes: list) -> HouseEntry | None:
+    """The entry of [houses.<name>], None if it is no table."""
+    sec = f"houses.{name}"
+    if not isinstance(h, dict):
+        r.problems.append(f"{r.where(sec)}: [{sec}] must be a table")
+        return None
+    r.unknown(sec, h, KEYS["house"])
+    file = h.get("file", name)
+    try:
+        fp = resolve(r.path.parent / file) if str(file).endswith(".toml") else resolve(file)
+    except ConfigError as exc:
+        r.problems.append(f"{r.where(sec, 'file')}: [{sec}] file = {file!r}: {exc}")
+        fp = Path(str(file))
+    node = h.get("node")
+    if node not in nodes:
+        close = difflib.get_close_matches(str(node), nodes, 1)
+        r.problems.append(f"{r.where(sec, 'node')}: [{sec}] node = {node!r}: not a node of the grid"
+                          + (f"; did you mean {close[0]!r}?" if close else f"; nodes: {', '.join(nodes)}"))
+    sub, ctl = h.get("substation", "rules"), h.get("controller", "built-in")
+    if sub not in SUBSTATION:
+        r.problems.append(f"{r.where(sec, 'substation')}: [{sec}] substation = {sub!r}: allowed {', '.join(SUBSTATION)}")
+    if ctl not in CONTROLLER:
+        r.problems.append(f"{r.where(sec, 'controller')}: [{sec}] controller = {ctl!r}: allowed {', '.join(CONTROLLER)}")
+    ov = h.get("overrides", {})
+    if not isinstance(ov, dict):
+        r.problems.append(f"{r.where(sec, 'overrides')}: [{sec}] overrides must be a table of \"instance.key\" = value")
+        ov = {}
+    port = int(r.number(sec, h, "modbus_port", 0, 0, 65535))
+    bus = h.get("can", "")
+    if not isinstance(bus, str):
+        r.problems.append(f"{r.where(sec, 'can')}: [{sec}] can = {bus!r}: a bus spec such as "
+                          f"\"socketcand:127.0.0.1:29536:can0\" or \"socketcan:can0\"")
+        bus = ""
+    return HouseEntry(name, fp, str(node), sub, ctl, dict(ov), port, bus)
