@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .component import Instance
+from .component import Instance, pack
 from .errors import ConfigError
 from .generated import PHASES, load_module, source  # noqa: F401 (load_module: House)
 from .signals import Signal, SignalCatalogue
@@ -128,6 +128,15 @@ class Context:
 
     def param(self, inst: Instance, values: np.ndarray, suffix: str = "") -> str:
         return self._slot("p", self.p0, self.p_slices, inst.name + suffix, values)
+
+    def views(self, inst: Instance, x0: np.ndarray | None = None) -> tuple[str, str]:
+        """(state view, parameter view) of an instance that several kinds reach (a header, a zone,
+        an emitter, a collector): allocated at the first call, from x0 or its kind's
+        initial_state and its packed Params."""
+        if inst.name not in self.x_slices:
+            self.state(inst, self.kinds[inst.kind].initial_state(inst) if x0 is None else x0)
+            self.param(inst, pack(inst.params))
+        return f"x_{inst.name}", f"p_{inst.name}"
 
     def _slot(self, array: str, chunks: list, slices: dict, key: str, values) -> str:
         a = sum(len(v) for v in chunks)

@@ -119,4 +119,4 @@ class Kind(radiator.Kind):
 
     def extra_signals(self, c, inst):
         return [f"{c.signal(inst, 'T_floor', 'degC', 'output', 'water and screed temperature (the return)')} = "
-                f"x_{inst.name}[0]"]
+                f"{self.return_state(c, inst)}"]

@@ -143,12 +143,9 @@ class Kind(ComponentKind):
     def views(self, c, inst):
         """The state and parameter views (allocated by whichever of collector and heat pump
         emits first; the initial ground temperature at the weather's start time)."""
-        if inst.name not in c.x_slices:
-            weather = c.instances.get("weather")
-            tau0 = weather.options.get("tau0", 0.0) if weather is not None else 0.0
-            c.state(inst, self.initial_state(inst, tau0))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}", f"p_{inst.name}"
+        weather = c.instances.get("weather")
+        tau0 = weather.options.get("tau0", 0.0) if weather is not None else 0.0
+        return c.views(inst, self.initial_state(inst, tau0))
 
     def source_temperature(self, c, inst) -> str:
         """The brine temperature a heat pump sees at the start of the step (collector outlet)."""

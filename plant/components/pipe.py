@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 from ..water import CP, RHO
 
 STATES = ("T",)
@@ -61,7 +61,6 @@ class Kind(ComponentKind):
         return CP * RHO * inst.params.V * float(x[0])
 
     def views(self, c, inst):
-        if inst.name not in c.x_slices:
-            c.state(inst, self.initial_state(inst))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}", f"p_{inst.name}"
+        """The state and parameter views (allocated by the first coupling point that uses the
+        header)."""
+        return c.views(inst)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 from ..water import CP, RHO
 from . import zone as zone_kind
 
@@ -94,18 +94,17 @@ class Kind(ComponentKind):
     HEAT = "heat emitted by the radiators into the zone"
 
     def return_state(self, c, inst):
-        """The start-of-step return temperature (the water node)."""
-        if inst.name not in c.x_slices:
-            c.state(inst, self.initial_state(inst))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}[0]"
+        """The start-of-step return temperature (the water node; allocated by the first of the
+        mixing station and the emitter to ask)."""
+        x, _ = c.views(inst)
+        return f"{x}[0]"
 
     def emit_emitter(self, c, inst, m_flow, T_sup):
-        self.return_state(c, inst)
+        x, p = c.views(inst)
         zone = c.instances[inst.options["zone"]]
         T_ret, Q = c.var(f"T_{inst.name}_ret"), c.var(f"Q_{inst.name}")
         mod = c.module(self.KERNEL)
-        c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, x_{inst.name}, p_{inst.name}, {m_flow}, {T_sup}, "
+        c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, {x}, {p}, {m_flow}, {T_sup}, "
                              f"x_{zone.name}[{zone_kind.X.T_room}])")
         c.heat_to.setdefault(zone.name, []).append(Q)
         c.emit("signals", *self.extra_signals(c, inst),

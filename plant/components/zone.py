@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, param
 
 STATES = ("T_room", "T_mass")
 
@@ -102,14 +102,8 @@ class Kind(ComponentKind):
     def initial_state(self, inst):
         return initial_state(inst.params)
 
-    def state_view(self, c, inst):
-        if inst.name not in c.x_slices:
-            c.state(inst, self.initial_state(inst))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}", f"p_{inst.name}"
-
     def emit(self, c, inst):
-        x, p = self.state_view(c, inst)
+        x, p = c.views(inst)
         mod = c.module(__name__)
         T_set, Q_int, Q_sol, Q_loss = (c.var(v) for v in ("T_set_room", "Q_int", "Q_sol", "Q_zloss"))
         c.values[f"{inst.name}.T_set"] = T_set
