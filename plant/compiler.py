@@ -102,6 +102,7 @@ class Context:
         self.values: dict[str, str] = {}              # "instance.quantity" -> local of this step
         self.energy: list = []                        # (instance, fn(x, params) -> J)
         self.failed: set[str] = set()              # instances whose links were reported bad
+        self.reads: dict[str, Instance] = {}       # instance -> the first that reads its state (state_of)
         self._n_var = 0
 
     # --- code ----------------------------------------------------------------------------
@@ -137,6 +138,13 @@ class Context:
             self.state(inst, self.kinds[inst.kind].initial_state(inst) if x0 is None else x0)
             self.param(inst, pack(inst.params))
         return f"x_{inst.name}", f"p_{inst.name}"
+
+    def state_of(self, inst: Instance, other: Instance) -> str:
+        """The view of another instance's state, for inst's code to read or update. Never
+        allocated here (other's own kind does, wherever it emits, so the layout does not depend on
+        who asks first); a state nobody allocates is a problem at assembly."""
+        self.reads.setdefault(other.name, inst)
+        return f"x_{other.name}"
 
     def _slot(self, array: str, chunks: list, slices: dict, key: str, values) -> str:
         a = sum(len(v) for v in chunks)
@@ -346,6 +354,9 @@ def compile_plant(decl) -> CompiledPlant:
                     raise
         elif not problems:
             raise ConfigError(f"{name!r}: ports asked of an instance that is no storage")
+    for name, user in c.reads.items():
+        if name not in c.x_slices and not problems:
+            problems.append(f"{user.where}: reads the state of {name!r}, but no kind allocates one")
     catalogue = c.catalogue()
     _check_controller_links(c, catalogue)
     text = source(c, catalogue)

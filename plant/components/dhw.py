@@ -73,7 +73,8 @@ class Kind(ComponentKind):
         m_hot, T_tap, Q_miss = (c.var(v) for v in ("m_hot", "T_tap", "Q_miss"))
         mod = c.module(__name__)
         Q_dhw = self.take(c, inst, lambda p, st, i_out: (
-            [f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, x_{st}[{st}_out_layer[{i_out}]])"], m_hot))
+            [f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, "
+             f"{c.state_of(inst, c.instances[st])}[{st}_out_layer[{i_out}]])"], m_hot))
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",

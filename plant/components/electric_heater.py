@@ -126,9 +126,9 @@ class Kind(ComponentKind):
                                                       "P_nom unless driven from outside")
         c.write_command("control", f"{inst.name}.P_set", f"{p}[{PAR.P_nom}]")
         mod = c.module(__name__)
-        P = c.var("P_rod")
-        c.emit("hydraulics", f"{P} = {mod}.power({x}, {p}, {on}, {P_set}, x_{st.name}[{layer}])")
-        c.emit("storages", f"x_{st.name}[{layer}] += {P} * h / {p}[{C_LAYER}]")
+        P, T = c.var("P_rod"), c.state_of(inst, st)  # the storage's layer temperatures
+        c.emit("hydraulics", f"{P} = {mod}.power({x}, {p}, {on}, {P_set}, {T}[{layer}])")
+        c.emit("storages", f"{T}[{layer}] += {P} * h / {p}[{C_LAYER}]")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{x}[{X.E_el}] -= {P} * h",

@@ -105,7 +105,7 @@ class Kind(ComponentKind):
         T_ret, Q = c.var(f"T_{inst.name}_ret"), c.var(f"Q_{inst.name}")
         mod = c.module(self.KERNEL)
         c.emit("hydraulics", f"{T_ret}, {Q} = {mod}.step(h, {x}, {p}, {m_flow}, {T_sup}, "
-                             f"x_{zone.name}[{zone_kind.X.T_room}])")
+                             f"{c.state_of(inst, zone)}[{zone_kind.X.T_room}])")
         c.heat_to.setdefault(zone.name, []).append(Q)
         c.emit("signals", *self.extra_signals(c, inst),
                f"{c.signal(inst, 'Q_flow', 'W', 'output', self.HEAT)} = {Q}",

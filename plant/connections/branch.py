@@ -38,7 +38,7 @@ class Kind(ComponentKind):
                f"{side} = {up} > 0.5",
                f"{st}_in_layer[{i}] = int({p}[0]) if {side} else int({p}[1])",
                f"{st}_out_layer[{j}] = int({p}[2]) if {side} else int({p}[3])",
-               f"{T_in} = x_{st}[{st}_out_layer[{j}]]")
+               f"{T_in} = {c.state_of(inst, c.instances[st])}[{st}_out_layer[{j}]]")
         m, T = c.kinds[gen.kind].emit_generator(c, gen, T_in, "0.0")
         c.emit("hydraulics", f"{st}_in_m[{i}] = {m}", f"{st}_in_T[{i}] = {T} if {m} > 0.0 else {T_in}",
                f"{st}_out_m[{j}] = {m}")
