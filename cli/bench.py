@@ -16,6 +16,8 @@ EXAMPLES = """examples:
   twin bench space_heating --plc 127.0.0.1:5040 --period 0.05    # the PLC polls the twin
   twin bench brine --modbus-tcp 127.0.0.1:5034 --speed 200 --param P_heat_max=6000   # SF3's heat-pump source
   twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200         # the district grid emulator
+  twin bench space_heating_floor --modbus-tcp 127.0.0.1:5036       # the space-heating bench for SF2/SF3's floor heating
+  twin bench space_heating --modbus-tcp 127.0.0.1:5037 --param m_cooling_max=1.0   # for MF5's 30 kW heat-up
   twin bench list
 """
 

@@ -14,6 +14,8 @@ EXAMPLES = """examples:
   twin phil house1 --bench space_heating=127.0.0.1:5031 --bench tap_water=127.0.0.1:5032 --bench solar=127.0.0.1:5033 --typeday 4 --start 24 --hours 24 --speed 300 --step 2 --record runs/sf1
   twin bench brine --modbus-tcp 127.0.0.1:5034 --speed 200 &
   twin phil house3 --bench brine=127.0.0.1:5034 --typeday 1 --start 24 --hours 1 --speed 200 --step 2   # SF3's ground collector
+  twin bench space_heating_floor --modbus-tcp 127.0.0.1:5036 --speed 200 &   # the bench for a floor heating
+  twin phil house2 --bench space_heating=127.0.0.1:5036 --typeday 1 --start 31 --hours 1 --speed 200 --step 2   # SF2
   twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200 &
   twin phil house1 --bench grid=127.0.0.1:5035 --district coses --hours 1 --speed 200 --step 2   # SF1's node of the district grid
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
@@ -25,8 +27,8 @@ EXAMPLES = """examples:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("house", help="house (house1 = plant/houses/house1_phil.toml, house3 = house3_phil.toml), "
-                   "'lint', 'table' or 'compare'")
+    p.add_argument("house", help="house: house1 ... house5 or SF1 ... MF5 (its PHIL variant, "
+                   "plant/houses/house<N>_phil.toml) or a house file; 'lint', 'table' or 'compare'")
     p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path); with 'compare': the run directory")
     p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
     p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT",

@@ -112,6 +112,8 @@ class GridSide:
 class HouseOnGrid:
     """A PHIL house and its simulated grid side, stepped together (grid after the house)."""
 
+    boundary_signals = INPUTS + OUTPUTS
+
     def __init__(self, house: Any, grid: GridSide) -> None:
         self.house, self.grid = house, grid
 

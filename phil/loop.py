@@ -20,6 +20,7 @@ from typing import Any
 
 from gateway.clock import PacedClock
 from phil.benchmap import BenchMap, load_bench_map
+from phil.exports import exports
 from phil.master import BenchLink, ExchangeError
 from phil.served import ServedLink, SharedServer
 from phil.report import Tally
@@ -29,7 +30,9 @@ from plant.errors import ConfigError
 from plant.house import load_house
 from profiles.recording import Recorder
 
-HOUSE_FILES = {"house1": "house1_phil", "SF1": "house1_phil", "house3": "house3_phil", "SF3": "house3_phil"}
+#: the PHIL variant of each house, by its name and its laboratory name (plant/houses/house<N>_phil.toml)
+HOUSE_FILES = {**{f"house{n}": f"house{n}_phil" for n in range(1, 6)},
+               **{alias: f"house{n}_phil" for n, alias in enumerate(("SF1", "SF2", "SF3", "SF4", "MF5"), 1)}}
 
 
 @dataclass
@@ -129,6 +132,9 @@ class PhilLoop:
         for ch in self.channels.values():
             if ch.wiring.boundary:      # the simulated side a bench needs beside the house (the grid)
                 self.house = ch.wiring.boundary(self.house, options)
+        self.names = set(self.house.catalogue.names) | set(getattr(self.house, "boundary_signals", ()))
+        self._check_wired(house)
+        self.exports = exports(self.house, self.names)
         self.recorder = None
         for server in servers:
             server.start()
@@ -149,6 +155,19 @@ class PhilLoop:
         self._done = threading.Event()
         self.clock: PacedClock | None = None
 
+    def _check_wired(self, house: str) -> None:
+        """Every bench's wiring finds its signals in the house (house 4 has no solar collector),
+        checked before anything is exchanged."""
+        problems = []
+        for name, ch in self.channels.items():
+            missing = sorted(ch.wiring.used(tuple(i.name for i in ch.map.measurements())) - self.names)
+            if missing:
+                problems.append(f"--bench {name}: the PHIL house {house_file(house)} has no {', '.join(missing)}")
+        if problems:
+            wired = [b for b, w in WIRINGS.items() if w.boundary or not w.used(
+                tuple(i.name for i in load_bench_map(b).measurements())) - self.names]
+            raise ConfigError("; ".join(problems) + f"; benches this house is wired for: {', '.join(wired)}")
+
     def _columns(self) -> list[str]:
         cols = []
         for name, ch in self.channels.items():
@@ -157,8 +176,8 @@ class PhilLoop:
             cols += [f"{name}.{i.name}.used" for i in ch.map.measurements()]
             cols += [f"{name}.{i.name}.flag" for i in ch.map.measurements()]
             cols += [f"{name}.exchange_ms"]
-            cols += [s for s in ch.wiring.signals if s not in cols]
-        return cols + ["lateness_ms"]
+            cols += [s for s in ch.wiring.signals if s not in cols and s in self.names]
+        return cols + list(self.exports) + ["lateness_ms"]
 
     # --- one step ------------------------------------------------------------------------------
     def step(self, dt: float) -> None:
@@ -231,7 +250,9 @@ class PhilLoop:
         if not self.recorder:
             return
         for name in self.columns:
-            if name not in row and name != "lateness_ms":
+            if name in self.exports:
+                row[name] = self.exports[name](self.house)
+            elif name not in row and name != "lateness_ms":
                 row[name] = self.house.get(name)
         late = self.clock.lateness() if self.clock else []
         row["lateness_ms"] = float(late[-1]) * 1e3 if len(late) else 0.0

@@ -1,13 +1,15 @@
 """Wiring: which simulated signals make a bench's set-points, and where its measurements go.
 
 One entry per bench kind (the map's id): `setpoints(house)` gives the §13.2 set-points in the
-map's device units from the PHIL house (plant/houses/house1_phil.toml, house3_phil.toml),
+map's device units from the PHIL house (plant/houses/house<N>_phil.toml),
 `feed(house, values)` sets the house's live measured boundary from judged measurements, `pairs`
 names each set-point with the measurement that shows whether the bench followed it, `heat` the
 measurement that is the bench's heat meter [kWh] and `model_heat` the simulated heat flow [W] it
 is compared with, `clock` the bench PLC's clock [s] read with the meter, `ideal(house)`
 (optional) what a perfect bench would measure, fed during the warm-up, `boundary` (optional) the
-simulated side the bench needs beside the house.
+simulated side the bench needs beside the house. `used(measurements)` names every signal of the
+house the wiring reads or sets: a house without them is not wired for the bench (phil/loop.py
+refuses it before the run, naming what is missing: house 4 has no solar collector).
 
   space_heating  supply and flow the thermostat requests, the radiator return -> measured supply
                  and flow feed the radiators (mixer.T_sup, mixer.m_flow)
@@ -37,7 +39,7 @@ class Wiring:
     feed: Callable[[Any, dict[str, float]], None]
     pairs: tuple[tuple[str, str], ...]
     heat: str
-    #: simulated signals recorded beside the exchange
+    #: simulated signals recorded beside the exchange (those the house has: radiator or floor)
     signals: tuple[str, ...]
     #: the simulated heat flow [W] whose integral the bench's meter is compared with
     model_heat: str = ""
@@ -55,6 +57,30 @@ class Wiring:
     #: the simulated side the bench needs beside the house (the district grid): (house, options)
     #: -> the house and it as one plant (phil/grid.py HouseOnGrid)
     boundary: Callable[[Any, Any], Any] | None = None
+
+    def used(self, measurements: tuple[str, ...]) -> set[str]:
+        """The house signals this wiring reads or sets (found by running it on a probe)."""
+        probe = _Probe()
+        self.setpoints(probe)
+        self.feed(probe, dict.fromkeys(measurements, 1.0))
+        for call in (self.ideal, self.demand):
+            if call:
+                call(probe)
+        return probe.names | ({self.model_heat} if self.model_heat else set())
+
+
+class _Probe:
+    """A stand-in house that notes the names asked for."""
+
+    def __init__(self) -> None:
+        self.names: set[str] = set()
+
+    def get(self, name: str) -> float:
+        self.names.add(name)
+        return 1.0
+
+    def set(self, name: str, value: float) -> None:
+        self.names.add(name)
 
 
 FLOWING = 0.5
@@ -142,7 +168,7 @@ WIRINGS = {
                ("STM_HCRL_Set_degC", "STM_HCRL_degC")),
         heat="E_HC_kWh", model_heat="mixer.Q_flow", flow="SFW_HCRLbM_l_per_min",
         ideal=_space_heating_ideal, demand=_space_heating_demand,
-        signals=("zone.T_room", "zone.T_set", "radiator.Q_flow", "mixer.Q_flow", "mixer.T_ret",
+        signals=("zone.T_room", "zone.T_set", "radiator.Q_flow", "floor.Q_flow", "mixer.Q_flow", "mixer.T_ret",
                  "mixer.T_sup_set", "mixer.m_flow_set", "weather.T_air")),
     "tap_water": Wiring(
         setpoints=_tap_water_setpoints, feed=_tap_water_feed,
