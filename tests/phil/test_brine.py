@@ -99,13 +99,21 @@ def test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector(tmp_path):
                    "ground.T_sup", "ground.Q_flow", "brine.exchange_ms"):
         assert column in head
     assert abs(json.loads(out.strip().splitlines()[-1])["ledger"]["residual"]) < 1e-3
-    # twin phil compare: set vs measured; no house 3 simulated alone yet, said so (it crashed on
-    # a run without house 1's signals)
+    # twin phil compare: set vs measured, and house 3 simulated alone (house3.toml: its own heat
+    # pump on the same ground collector) on the same window: the brine's heat side by side
     result = compare(tmp_path / "run")
     [row] = result["interfaces"]["brine"]
     assert row["set"] == "STM_BCRLaM_Set_degC" and row["rms"] < 0.5
-    assert "no house simulated alone for 'SF3'" in (tmp_path / "run" / "compare.md").read_text()
-    assert result["plots"] == ["compare_brine.png"]
+    assert result["alone_house"] == "house3"
+    [ground] = result["house"]
+    assert ground["quantity"] == "heat from the ground (brine) [kWh]"
+    # the recording's whole span: the 300 s warm-up (ideal brine, not counted) and the 30 min
+    assert b["heat_model_kWh"] < ground["phil"] < 1.5 * b["heat_model_kWh"] and ground["alone"] >= 0.0
+    assert {"storage.T_top", "storage.T_bot", "storage.SOC"} <= set(result["alone_storages"])
+    assert "heat_pump" in result["alone_generators_kWh"]
+    md = (tmp_path / "run" / "compare.md").read_text()
+    assert "## Against the house simulated alone (house3," in md and "Not compared: the room; without the space-heating bench" in md
+    assert result["plots"] == ["compare_brine.png", "compare_house.png"]
 
 
 @pytest.mark.parametrize("fault", ["nan", "out_of_range", "stale"])

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from phil.benchmap import load_bench_map
+from phil.compare import compare
 from phil.emulator.server import BenchServer
 from phil.exports import EXPORTS
 from phil.loop import HOUSE_FILES, PhilLoop, PhilOptions
@@ -79,6 +80,16 @@ def test_twin_phil_runs_the_variant(tmp_path, house, bench):
     assert ("lab.RelativHumidityAir_percent" in head) == (house == "house2")
     meta = json.loads((tmp_path / "run" / "meta.json").read_text())
     assert meta["house"] == house
+    if house == "house2":
+        # twin phil compare: house 2 simulated alone (house2.toml: heat pump, boiler, storage) on
+        # the same window, its heat per interface beside the PHIL house's
+        result = compare(tmp_path / "run", plots=False)
+        assert result["alone_house"] == "house2"
+        rows = {r["quantity"]: r for r in result["house"]}
+        assert set(rows) == {"room temperature mean [degC]", "heat to the floor heating [kWh]", "hot water [kWh]"}
+        assert rows["room temperature mean [degC]"]["rms_difference"] < 2.0
+        assert {"heat_pump", "boiler"} <= set(result["alone_generators_kWh"])
+        assert "storage.T_top" in result["alone_storages"]
 
 
 def test_sf2_closed_loop_heat_agrees_with_its_benches(tmp_path):
