@@ -23,6 +23,7 @@ once at its source and once at its sink and the energy ledger closes to round-of
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from difflib import get_close_matches
 
 import numpy as np
 
@@ -37,20 +38,28 @@ LEDGER_CATEGORIES = ("fuel", "el", "heat", "building", "dhw", "loss", "missing")
 
 @dataclass
 class StoragePorts:
-    """Port slots of one storage, requested by the connections attached to it."""
+    """Port slots of one storage, requested by the connections attached to it, and the names of
+    its port arrays in the step (`array`, `coil_heat`): no kind spells them."""
 
+    storage: str                                     # the storage's instance name
     n_in: int = 0
     n_out: int = 0
     n_coil: int = 0
     fixed_in: list = field(default_factory=list)     # (slot, layer) set at compile time
     fixed_out: list = field(default_factory=list)
     coils: list = field(default_factory=list)        # (slot, top layer, bottom layer)
-    users: dict = field(default_factory=dict)        # (user, key) -> slot: a port connected twice
+    ARRAYS = ("in_layer", "in_m", "in_T", "out_layer", "out_m", "out_T",  # per inflow, outflow slot; per coil;
+              "coil_top", "coil_bot", "coil_UA", "coil_m", "coil_Tin", "coil_Tout", "q")  # scratch: the kernel's order
 
-    def _claim(self, inst, key, problems):
-        if (inst.name, key) in self.users:
-            problems.append(f"{inst.where} {key}: port connected twice")
-        self.users[(inst.name, key)] = True
+    def array(self, what: str) -> str:
+        """The name in the step of the port array `what` (one of ARRAYS)."""
+        if what not in self.ARRAYS:
+            raise KeyError(f"{what!r}: no port array of a storage; one of {', '.join(self.ARRAYS)}")
+        return f"{self.storage}_{what}"
+
+    def coil_heat(self, k: int) -> str:
+        """The local of coil k's heat into the storage this step (set by the storage's allocate)."""
+        return f"{self.storage}_coil_Q_{k}"
 
     def add_inlet(self, inst, key, layer, n=1):
         """n inflow slots (layer None: set at run time by the user); returns the first slot."""
@@ -131,9 +140,8 @@ class Context:
         return self._slot("p", self.p0, self.p_slices, inst.name + suffix, values)
 
     def views(self, inst: Instance, x0: np.ndarray | None = None) -> tuple[str, str]:
-        """(state view, parameter view) of an instance that several kinds reach (a header, a zone,
-        an emitter, a collector): allocated at the first call, from x0 or its kind's
-        initial_state and its packed Params."""
+        """(state view, parameter view) of an instance several kinds reach (a header, zone, emitter,
+        collector); the first call allocates them: x0 (else its initial_state), its packed Params."""
         if inst.name not in self.x_slices:
             self.state(inst, self.kinds[inst.kind].initial_state(inst) if x0 is None else x0)
             self.param(inst, pack(inst.params))
@@ -178,18 +186,26 @@ class Context:
         return self.named_signal(name, unit, causality, description, inst.order if order is None else order)
 
     def named_signal(self, name: str, unit: str, causality: str, description: str, order: int) -> str:
-        if name in self._sig_index:
+        if self.has_signal(name):
             self.problems.append(f"signal {name!r} declared twice (two components claim it)")
         self._sig_index[name] = len(self._signals)
         self._signals.append((order, len(self._signals), name, unit, causality, description))
-        return f"s[§{name}§]"
+        return self.s(name)
+
+    def has_signal(self, name: str) -> bool:
+        """Whether a kind has declared the signal `name` so far (in emission order)."""
+        return name in self._sig_index
+
+    def signal_index(self, name: str) -> str:
+        """The index of a signal in s, as the step's source writes it (resolved at assembly)."""
+        return f"§{name}§"
 
     def s(self, name: str) -> str:
         """The slot of a signal that some kind declares (resolved after every kind has emitted)."""
-        return f"s[§{name}§]"
+        return f"s[{self.signal_index(name)}]"
 
     def remote(self, name: str) -> str:
-        return f"remote[§{name}§]"
+        return f"remote[{self.signal_index(name)}]"
 
     def write_command(self, phase: str, target: str, expr: str) -> None:
         """A controller writes an input unless it is driven from outside (remote, bound)."""
@@ -200,8 +216,12 @@ class Context:
         self.ledger.append((key, inst.name, category))
         return f"ledger[{len(self.ledger) - 1}]"
 
-    def storage_ports(self, storage: str) -> StoragePorts:
-        return self.ports.setdefault(storage, StoragePorts())
+    def storage_ports(self, storage: str, ask: bool = True) -> StoragePorts:
+        """The ports of `storage` and the names of its arrays. A connection asks for them (the
+        storage allocates them at assembly, in the order first asked for); the storage's own code
+        passes ask=False: it emits before the connections that ask."""
+        return self.ports.setdefault(storage, StoragePorts(storage)) if ask else \
+            self.ports.get(storage) or StoragePorts(storage)
 
     def port_layer(self, inst: Instance, key: str, storage: str) -> int:
         """Layer of the port inst.options[key] (a height in m) in `storage`; a height outside the
@@ -250,8 +270,6 @@ class Context:
             elif self.problems:
                 out.append("0")  # a consequence of a problem reported already
             else:
-                from difflib import get_close_matches
-
                 close = get_close_matches(part, catalogue.names, n=3, cutoff=0.6)
                 self.problems.append(f"signal {part!r} is read but no component provides it; "
                                      + (f"did you mean {', '.join(close)}?" if close else
@@ -294,8 +312,6 @@ def _owners_of_failed(c: Context) -> set[str]:
 
 def _check_controller_links(c: Context, catalogue: SignalCatalogue) -> None:
     """Every controller reads signals that exist and writes inputs (with the closest names)."""
-    from difflib import get_close_matches
-
     for inst in c.instances.values():
         for key in getattr(c.kinds[inst.kind], "SIGNAL_LINKS", ()):
             name = inst.options.get(key)

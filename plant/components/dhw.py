@@ -54,27 +54,28 @@ class Kind(ComponentKind):
              "cold": (REQUIRED, "height of the cold-water inlet [m]")}
 
     def take(self, c, inst, m_hot_of):
-        """The storage ports of the draw: m_hot_of(p, st, i_out) -> (lines computing the hot-water
-        flow into its first name, that name); returns (p, st, i_out, the heat-to-tap local)."""
+        """The storage ports of the draw: m_hot_of(p, T_hot) -> (lines computing the hot-water
+        flow into its first name, that name), T_hot the start-of-step temperature at the hot
+        outlet; returns the heat-to-tap local."""
         p = c.param(inst, pack(inst.params))
         st = inst.options["storage"]
         ports = c.storage_ports(st)
         i_in = ports.add_inlet(inst, "cold", c.port_layer(inst, "cold", st))
         i_out = ports.add_outlet(inst, "hot", c.port_layer(inst, "hot", st))
-        lines, m_hot = m_hot_of(p, st, i_out)
+        a = ports.array
+        lines, m_hot = m_hot_of(p, f"{c.state_of(inst, c.instances[st])}[{a('out_layer')}[{i_out}]]")
         Q_dhw = c.var("Q_dhw")
-        c.emit("draws", *lines, f"{st}_in_m[{i_in}] = {m_hot}", f"{st}_in_T[{i_in}] = {p}[{P.T_cold}]",
-               f"{st}_out_m[{i_out}] = {m_hot}")
-        c.emit("signals", f"{Q_dhw} = {m_hot} * CP * ({st}_out_T[{i_out}] - {p}[{P.T_cold}])",
+        c.emit("draws", *lines, f"{a('in_m')}[{i_in}] = {m_hot}", f"{a('in_T')}[{i_in}] = {p}[{P.T_cold}]",
+               f"{a('out_m')}[{i_out}] = {m_hot}")
+        c.emit("signals", f"{Q_dhw} = {m_hot} * CP * ({a('out_T')}[{i_out}] - {p}[{P.T_cold}])",
                f"{c.ledger_entry(inst, 'dhw')} += {Q_dhw} * h")
         return Q_dhw
 
     def emit(self, c, inst):
         m_hot, T_tap, Q_miss = (c.var(v) for v in ("m_hot", "T_tap", "Q_miss"))
         mod = c.module(__name__)
-        Q_dhw = self.take(c, inst, lambda p, st, i_out: (
-            [f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, "
-             f"{c.state_of(inst, c.instances[st])}[{st}_out_layer[{i_out}]])"], m_hot))
+        Q_dhw = self.take(c, inst, lambda p, T_hot: (
+            [f"{m_hot}, {T_tap}, {Q_miss} = {mod}.draw({p}, m_draw, {T_hot})"], m_hot))
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
@@ -105,18 +106,21 @@ class CoilKind(Kind):
         if isinstance(ua, bool) or not isinstance(ua, (int, float)) or not ua > 0:
             c.problems.append(f"{inst.at('UA')} = {ua!r}: a conductance > 0 W/K")
             ua = 1.0
-        k = c.storage_ports(st).add_coil(inst, c.port_layer(inst, "inlet", st), c.port_layer(inst, "outlet", st))
+        ports = c.storage_ports(st)
+        k = ports.add_coil(inst, c.port_layer(inst, "inlet", st), c.port_layer(inst, "outlet", st))
+        a = ports.array
         m, T_out, T_tap, Q, Q_miss = (c.var(v) for v in ("m_coil", "T_coil", "T_tap", "Q_dhw", "Q_miss"))
         c.emit("draws",
-               f"{T_out} = {st}_coil_Tout[{k}]",  # the last step's outlet: what the valve saw
+               f"{T_out} = {a('coil_Tout')}[{k}]",  # the last step's outlet: what the valve saw
                f"{m} = m_draw if {T_out} <= {p}[{P.T_set}] else "
                f"m_draw * ({p}[{P.T_set}] - {p}[{P.T_cold}]) / ({T_out} - {p}[{P.T_cold}])",
-               f"{st}_coil_m[{k}] = {m}", f"{st}_coil_Tin[{k}] = {p}[{P.T_cold}]", f"{st}_coil_UA[{k}] = {float(ua)!r}")
+               f"{a('coil_m')}[{k}] = {m}", f"{a('coil_Tin')}[{k}] = {p}[{P.T_cold}]",
+               f"{a('coil_UA')}[{k}] = {float(ua)!r}")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
-               f"{Q} = {m} * CP * ({st}_coil_Tout[{k}] - {p}[{P.T_cold}]) if {m} > 0.0 else 0.0",
-               f"{T_tap} = ({m} * {st}_coil_Tout[{k}] + (m_draw - {m}) * {p}[{P.T_cold}]) / m_draw "
-               f"if m_draw > 0.0 else {st}_coil_Tout[{k}]",
+               f"{Q} = {m} * CP * ({a('coil_Tout')}[{k}] - {p}[{P.T_cold}]) if {m} > 0.0 else 0.0",
+               f"{T_tap} = ({m} * {a('coil_Tout')}[{k}] + (m_draw - {m}) * {p}[{P.T_cold}]) / m_draw "
+               f"if m_draw > 0.0 else {a('coil_Tout')}[{k}]",
                f"{Q_miss} = max(m_draw * CP * ({p}[{P.T_set}] - {p}[{P.T_cold}]) - {Q}, 0.0)",
                f"{sig('m_flow_demand', 'kg/s', 'tap draw at the set temperature (profile)')} = m_draw",
                f"{sig('m_flow_hot', 'kg/s', 'water heated through the coil')} = {m}",

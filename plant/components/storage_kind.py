@@ -76,12 +76,10 @@ class Kind(ComponentKind):
     def emit(self, c, inst):
         x, p, Ql = self.emit_signals(c, inst)
         Qc = c.var("Q_coil")
-        inst.q_coil = Qc
-        a = inst.name
-        smod = c.module(storage.__name__)
-        c.emit("storages", f"{Ql}, {Qc} = {smod}.step(h, {x}, {p}, {a}_in_layer, {a}_in_m, {a}_in_T, "
-                           f"{a}_out_layer, {a}_out_m, {a}_out_T, {a}_coil_top, {a}_coil_bot, {a}_coil_UA, "
-                           f"{a}_coil_m, {a}_coil_Tin, {a}_coil_Tout, {a}_q)")
+        c.values[f"{inst.name}.Q_coil"] = Qc  # the coils' heat of the kernel, for allocate
+        ports = c.storage_ports(inst.name, ask=False)  # the names of its arrays, in the kernel's order
+        arrays = ", ".join(map(ports.array, ports.ARRAYS))
+        c.emit("storages", f"{Ql}, {Qc} = {c.module(storage.__name__)}.step(h, {x}, {p}, {arrays})")
 
     def emit_signals(self, c, inst):
         """State, parameters, sensors, signals and ledger of a storage; returns (state view,
@@ -101,9 +99,9 @@ class Kind(ComponentKind):
                 heights = None
             else:
                 n = len(heights)
-        first = [c.signal(inst, f"T_sensor_{i}", "degC", "output",
-                          f"sensor {i} of {n} (1 = bottom, {n} = top)") for i in range(1, n + 1)][0]
-        first = first[2:-1]  # the slot index inside s[...] (resolved at assembly)
+        for i in range(1, n + 1):
+            c.signal(inst, f"T_sensor_{i}", "degC", "output", f"sensor {i} of {n} (1 = bottom, {n} = top)")
+        first = c.signal_index(f"{inst.name}.T_sensor_1")
         mod = c.module(__name__)
         if heights is None:
             read = f"{mod}.sensors({x}, s, {first}, {n})"
@@ -151,12 +149,13 @@ class Kind(ComponentKind):
 
     def allocate(self, c, inst, ports):
         """The port arrays, once every connection has asked for its slots; and each coil's heat
-        (`<storage>_coil_Q_<k>`): the kernel's own sum when the coil is the only one, else from
+        (`ports.coil_heat(k)`): the kernel's own sum when the coil is the only one, else from
         the coil's flow and temperatures."""
-        a = inst.name
+        a = ports.array
         for k in range(ports.n_coil):
-            q = getattr(inst, "q_coil", None) if ports.n_coil == 1 else None
-            c.emit("storages", f"{a}_coil_Q_{k} = " + (q or f"{a}_coil_m[{k}] * CP * ({a}_coil_Tin[{k}] - {a}_coil_Tout[{k}])"))
+            q = c.values.get(f"{inst.name}.Q_coil") if ports.n_coil == 1 else None
+            c.emit("storages", f"{ports.coil_heat(k)} = "
+                   + (q or f"{a('coil_m')}[{k}] * CP * ({a('coil_Tin')}[{k}] - {a('coil_Tout')}[{k}])"))
         in_layer = np.zeros(ports.n_in, dtype=np.int64)
         for slot, layer in ports.fixed_in:
             in_layer[slot] = layer
@@ -166,11 +165,11 @@ class Kind(ComponentKind):
         top = [t for _, t, _ in sorted(ports.coils)]
         bot = [b for _, _, b in sorted(ports.coils)]
         c.header.extend([
-            f"{a}_in_layer = {c.int_array(in_layer)}", f"{a}_in_m = {c.float_array(ports.n_in)}",
-            f"{a}_in_T = {c.float_array(ports.n_in)}",
-            f"{a}_out_layer = {c.int_array(out_layer)}", f"{a}_out_m = {c.float_array(ports.n_out)}",
-            f"{a}_out_T = {c.float_array(ports.n_out)}",
-            f"{a}_coil_top = {c.int_array(top)}", f"{a}_coil_bot = {c.int_array(bot)}",
-            f"{a}_coil_UA = {c.float_array(ports.n_coil)}", f"{a}_coil_m = {c.float_array(ports.n_coil)}",
-            f"{a}_coil_Tin = {c.float_array(ports.n_coil)}", f"{a}_coil_Tout = {c.float_array(ports.n_coil)}",
-            f"{a}_q = {c.float_array(inst.params.n_layers)}"])
+            f"{a('in_layer')} = {c.int_array(in_layer)}", f"{a('in_m')} = {c.float_array(ports.n_in)}",
+            f"{a('in_T')} = {c.float_array(ports.n_in)}",
+            f"{a('out_layer')} = {c.int_array(out_layer)}", f"{a('out_m')} = {c.float_array(ports.n_out)}",
+            f"{a('out_T')} = {c.float_array(ports.n_out)}",
+            f"{a('coil_top')} = {c.int_array(top)}", f"{a('coil_bot')} = {c.int_array(bot)}",
+            f"{a('coil_UA')} = {c.float_array(ports.n_coil)}", f"{a('coil_m')} = {c.float_array(ports.n_coil)}",
+            f"{a('coil_Tin')} = {c.float_array(ports.n_coil)}", f"{a('coil_Tout')} = {c.float_array(ports.n_coil)}",
+            f"{a('q')} = {c.float_array(inst.params.n_layers)}"])

@@ -32,13 +32,14 @@ class Kind(ComponentKind):
         p = c.param(inst, np.array([*sup, *ret], dtype=np.float64))
         ports = c.storage_ports(st)
         i, j = ports.add_inlet(inst, "supply", None), ports.add_outlet(inst, "return", None)
+        a = ports.array
         up = c.signal(inst, "upper", "1", "input", "three-way valve: 1 = upper port pair, 0 = lower") if valve else "1.0"
         T_in, side = c.var("T_in"), c.var("upper")
         c.emit("hydraulics",
                f"{side} = {up} > 0.5",
-               f"{st}_in_layer[{i}] = int({p}[0]) if {side} else int({p}[1])",
-               f"{st}_out_layer[{j}] = int({p}[2]) if {side} else int({p}[3])",
-               f"{T_in} = {c.state_of(inst, c.instances[st])}[{st}_out_layer[{j}]]")
+               f"{a('in_layer')}[{i}] = int({p}[0]) if {side} else int({p}[1])",
+               f"{a('out_layer')}[{j}] = int({p}[2]) if {side} else int({p}[3])",
+               f"{T_in} = {c.state_of(inst, c.instances[st])}[{a('out_layer')}[{j}]]")
         m, T = c.kinds[gen.kind].emit_generator(c, gen, T_in, "0.0")
-        c.emit("hydraulics", f"{st}_in_m[{i}] = {m}", f"{st}_in_T[{i}] = {T} if {m} > 0.0 else {T_in}",
-               f"{st}_out_m[{j}] = {m}")
+        c.emit("hydraulics", f"{a('in_m')}[{i}] = {m}", f"{a('in_T')}[{i}] = {T} if {m} > 0.0 else {T_in}",
+               f"{a('out_m')}[{j}] = {m}")

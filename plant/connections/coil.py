@@ -40,16 +40,17 @@ class Kind(ComponentKind):
                 and inst.options["top"] < inst.options["bottom"]:
             c.problems.append(f"{inst.where} top = {inst.options['top']}: must be above bottom = "
                               f"{inst.options['bottom']}")
-        k = c.storage_ports(st).add_coil(inst, top, bottom)
+        ports = c.storage_ports(st)
+        k, a = ports.add_coil(inst, top, bottom), ports.array
         on = c.signal(inst, "on", "1", "input", "charging pump command (0/1)")
         m = c.var("m_coil")
         c.emit("hydraulics",
                f"{m} = {p}[{P.m_flow}] if {on} > 0.5 else 0.0",
-               f"{st}_coil_m[{k}] = {m}",
-               f"{st}_coil_Tin[{k}] = {T_sup}",
-               f"{st}_coil_UA[{k}] = {p}[{P.UA}]")
-        Q = f"{st}_coil_Q_{k}"  # the storage says, once it knows all its coils (storage_kind.allocate)
+               f"{a('coil_m')}[{k}] = {m}",
+               f"{a('coil_Tin')}[{k}] = {T_sup}",
+               f"{a('coil_UA')}[{k}] = {p}[{P.UA}]")
+        Q = ports.coil_heat(k)  # the storage says, once it knows all its coils (storage_kind.allocate)
         c.emit("signals",
                f"{c.signal(inst, 'm_flow', 'kg/s', 'output', 'charging flow through the coil')} = {m}",
                f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat given by the coil to the storage')} = {Q}")
-        return m, f"({st}_coil_Tout[{k}] if {m} > 0.0 else {T_sup})"
+        return m, f"({a('coil_Tout')}[{k}] if {m} > 0.0 else {T_sup})"

@@ -42,7 +42,7 @@ class DrawKind(dhw.Kind):
     def emit(self, c, inst):
         m = c.signal(inst, "m_flow_hot", "kg/s", "input", "measured hot water taken from the storage")
         mv = c.var("m_hot")
-        Q = self.take(c, inst, lambda p, st, i_out: ([f"{mv} = max({m}, 0.0)"], mv))
+        Q = self.take(c, inst, lambda p, T_hot: ([f"{mv} = max({m}, 0.0)"], mv))
         c.emit("signals", f"{c.signal(inst, 'Q_flow', 'W', 'output', 'heat drawn with the hot water')} = {Q}")
 
 
