@@ -77,54 +77,9 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     header = ["time"] + rec.names
     raw = np.column_stack([rec.time, rec.values])
     if mapping is None:
-        # columns named like catalogue signals need no mapping (catalogue units assumed)
-        colmap = {n: n for n in rec.names if n in CATALOGUE}
-        units = {n: CATALOGUE.signal(n).unit for n in colmap}
-        ignored = [n for n in rec.names if n not in CATALOGUE]
-        if run:
-            warnings += [f"column {n!r}: not a catalogue signal; ignored" for n in ignored]
-        elif not colmap:
-            raise ConfigError(f"{p}: no column is a catalogue signal name; pass --map columns.toml")
-        elif ignored:
-            warnings.append("columns not in the catalogue ignored: " + ", ".join(ignored))
+        colmap, units = _catalogue_columns(p, rec, run, warnings)
     else:
-        colmap = {}
-        problems = []
-        for col, sig in rec.signals.items():
-            if sig not in CATALOGUE:
-                close = get_close_matches(str(sig), CATALOGUE.names, n=2)
-                problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
-                                + (f"; did you mean {', '.join(close)}?" if close else
-                                   "; list them with `twin signals house1`"))
-                continue
-            if col not in rec.names:
-                close = get_close_matches(col, rec.names, n=2)
-                problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
-                                + (f"; did you mean {', '.join(close)}?" if close else ""))
-                continue
-            colmap[col] = sig
-        units = {}
-        for col, sig in colmap.items():
-            u = rec.units.get(col)
-            cat_unit = CATALOGUE.signal(sig).unit
-            if u is None:
-                units[col] = cat_unit
-                continue
-            if u not in unit_table.UNITS:
-                problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
-                                + ", ".join(sorted(n for n in unit_table.UNITS if n)))
-                continue
-            if not unit_table.convertible(u, cat_unit):
-                problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
-                                f"(a {cat_unit} signal)")
-                continue
-            units[col] = u
-        if problems:
-            raise ConfigError("\n".join(problems))
-        extra = [h for h in rec.names if h not in colmap]
-        if extra:
-            warnings.append(f"{len(extra)} column(s) not in the mapping ignored: " + ", ".join(extra[:8])
-                            + (" ..." if len(extra) > 8 else ""))
+        colmap, units = _mapped_columns(p, rec, mapping, warnings)
     start = start or rec.start
     if rec.dropped_rows:
         warnings.append(f"{rec.dropped_rows} row(s) with the wrong number of fields dropped")
@@ -134,7 +89,88 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         start = house_start
         warnings.append(f"no start date in the recording or mapping ([recording] start); "
                         f"assumed the house file's start {start}")
-    t = raw[:, header.index("time")]
+    raw, t = _repair_time(raw, raw[:, header.index("time")], warnings)
+    transforms = rec.meta.get("columns", {}) if mapping is not None else {}
+    ports = rec.meta.get("ports", {}) if mapping is not None else {}
+    _check_ports(ports, mapping)
+    data, heights = _convert_columns(raw, header, colmap, units, transforms, mapping, warnings)
+    _check_places(heights, {sig: col for col, sig in colmap.items()}, mapping)
+    valid = _gaps(t, warnings)
+    _hold_or_exclude_missing(data, warnings)
+    return Samples(str(p), str(start), t, data, warnings, valid,
+                   {sig: col for col, sig in colmap.items()}, heights, ports)
+
+
+def _catalogue_columns(p: Path, rec, run: bool, warnings: list) -> tuple[dict, dict]:
+    """Without a columns file: the columns named like catalogue signals, in catalogue units ->
+    ({column: signal}, {column: unit}). A run directory's other columns are named one warning
+    each; any other recording must have a catalogue column, and the rest are listed in one."""
+    colmap = {n: n for n in rec.names if n in CATALOGUE}
+    units = {n: CATALOGUE.signal(n).unit for n in colmap}
+    ignored = [n for n in rec.names if n not in CATALOGUE]
+    if run:
+        warnings += [f"column {n!r}: not a catalogue signal; ignored" for n in ignored]
+    elif not colmap:
+        raise ConfigError(f"{p}: no column is a catalogue signal name; pass --map columns.toml")
+    elif ignored:
+        warnings.append("columns not in the catalogue ignored: " + ", ".join(ignored))
+    return colmap, units
+
+
+def _mapped_columns(p: Path, rec, mapping, warnings: list) -> tuple[dict, dict]:
+    """The columns file's [columns] and [units] checked against the catalogue and the recording
+    -> ({column: signal}, {column: unit}). Every problem goes into one ConfigError, so that the
+    file can be fixed in one go rather than one line per attempt."""
+    colmap = {}
+    problems = []
+    for col, sig in rec.signals.items():
+        if sig not in CATALOGUE:
+            close = get_close_matches(str(sig), CATALOGUE.names, n=2)
+            problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
+                            + (f"; did you mean {', '.join(close)}?" if close else
+                               "; list them with `twin signals house1`"))
+            continue
+        if col not in rec.names:
+            close = get_close_matches(col, rec.names, n=2)
+            problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
+                            + (f"; did you mean {', '.join(close)}?" if close else ""))
+            continue
+        colmap[col] = sig
+    units = _mapped_units(rec, colmap, mapping, problems)
+    if problems:
+        raise ConfigError("\n".join(problems))
+    extra = [h for h in rec.names if h not in colmap]
+    if extra:
+        warnings.append(f"{len(extra)} column(s) not in the mapping ignored: " + ", ".join(extra[:8])
+                        + (" ..." if len(extra) > 8 else ""))
+    return colmap, units
+
+
+def _mapped_units(rec, colmap: dict, mapping, problems: list) -> dict:
+    """{column: declared unit} for the mapped columns (the signal's catalogue unit where none is
+    declared); an unknown unit or one of another kind than the signal's goes to problems."""
+    units = {}
+    for col, sig in colmap.items():
+        u = rec.units.get(col)
+        cat_unit = CATALOGUE.signal(sig).unit
+        if u is None:
+            units[col] = cat_unit
+            continue
+        if u not in unit_table.UNITS:
+            problems.append(f"{mapping}: [units] {col!r} = {u!r}: unknown unit; allowed: "
+                            + ", ".join(sorted(n for n in unit_table.UNITS if n)))
+            continue
+        if not unit_table.convertible(u, cat_unit):
+            problems.append(f"{mapping}: [units] {col!r} = {u!r}: wrong unit for {sig} "
+                            f"(a {cat_unit} signal)")
+            continue
+        units[col] = u
+    return units
+
+
+def _repair_time(raw: np.ndarray, t: np.ndarray, warnings: list) -> tuple[np.ndarray, np.ndarray]:
+    """Rows without a finite time dropped, rows sorted by time (stable), of duplicate timestamps
+    the last row kept -> (raw, t)."""
     keep = np.isfinite(t)
     if not keep.all():
         warnings.append(f"{int((~keep).sum())} row(s) without a valid time dropped")
@@ -148,16 +184,25 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     if dup.any():
         warnings.append(f"{int(dup.sum())} duplicate timestamp(s); kept the last row of each")
         raw, t = raw[~dup], t[~dup]
-    data = {}
-    heights = {}
-    transforms = rec.meta.get("columns", {}) if mapping is not None else {}
-    ports = rec.meta.get("ports", {}) if mapping is not None else {}
+    return raw, t
+
+
+def _check_ports(ports: dict, mapping) -> None:
+    """[ports] may only name storages the twin has (those with T_sensor_N signals)."""
     storages = sorted({s.split(".", 1)[0] for s in CATALOGUE.names if ".T_sensor_" in s})
     for name in ports:
         if name not in storages:
             close = get_close_matches(name, storages, n=2)
             raise ConfigError(f"{mapping}: [ports] {name}: not a storage of the twin"
                               + (f"; did you mean {', '.join(close)}?" if close else f"; storages: {', '.join(storages)}"))
+
+
+def _convert_columns(raw: np.ndarray, header: list, colmap: dict, units: dict, transforms: dict, mapping,
+                     warnings: list) -> tuple[dict, dict]:
+    """Each mapped column in its signal's catalogue unit -> ({signal: values}, {signal: declared
+    sensor height}); of two columns mapped onto one signal the later wins, with a warning."""
+    data = {}
+    heights = {}
     for col, sig in colmap.items():
         u = units[col]
         cat_unit = CATALOGUE.signal(sig).unit
@@ -174,25 +219,38 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         else:
             f, off = unit_table.factors(u, cat_unit)
             v = (x * tr.get("scale", 1.0) + tr.get("offset", 0.0)) * f + off
-        lo_hi = PLAUSIBLE.get(cat_unit)
-        if lo_hi is not None:
-            fin = v[np.isfinite(v)]
-            if fin.size:
-                med = float(np.median(fin))
-                if not lo_hi[0] <= med <= lo_hi[1]:
-                    hint = ""
-                    if cat_unit == "degC" and 230 < med < 400:
-                        hint = " (looks like Kelvin: declare the unit \"K\")"
-                    elif cat_unit == "kg/s" and med > 5:
-                        hint = " (looks like l/min or l/h: declare the unit)"
-                    elif cat_unit == "W" and abs(med) < 1e-3:
-                        hint = ""
-                    raise DataError(f"column {col!r} -> {sig}: median {med:g} {cat_unit} after unit "
-                                    f"conversion from {u!r} is implausible{hint}")
+        _check_plausible(v, col, sig, u, cat_unit)
         if sig in data:
             warnings.append(f"{sig}: mapped from two columns; the later one ({col!r}) used")
         data[sig] = v
-    _check_places(heights, {sig: col for col, sig in colmap.items()}, mapping)
+    return data, heights
+
+
+def _check_plausible(v: np.ndarray, col: str, sig: str, u: str, cat_unit: str) -> None:
+    """A DataError when the converted column's median lies outside PLAUSIBLE for its unit: a
+    wrongly declared unit (Kelvin labelled degC, l/min labelled kg/s) would otherwise be replayed
+    as a huge mismatch and diagnosed."""
+    lo_hi = PLAUSIBLE.get(cat_unit)
+    if lo_hi is None:
+        return
+    fin = v[np.isfinite(v)]
+    if fin.size:
+        med = float(np.median(fin))
+        if not lo_hi[0] <= med <= lo_hi[1]:
+            hint = ""
+            if cat_unit == "degC" and 230 < med < 400:
+                hint = " (looks like Kelvin: declare the unit \"K\")"
+            elif cat_unit == "kg/s" and med > 5:
+                hint = " (looks like l/min or l/h: declare the unit)"
+            elif cat_unit == "W" and abs(med) < 1e-3:
+                hint = ""
+            raise DataError(f"column {col!r} -> {sig}: median {med:g} {cat_unit} after unit "
+                            f"conversion from {u!r} is implausible{hint}")
+
+
+def _gaps(t: np.ndarray, warnings: list) -> np.ndarray:
+    """The samples usable for scoring: False within the hour after each gap longer than 3 median
+    sample intervals (the replay held the commands through it and needs time to settle)."""
     dts = np.diff(t)
     med = float(np.median(dts))
     valid = np.ones(len(t), dtype=bool)
@@ -204,6 +262,12 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
                         "the first hour after each gap excluded from scoring")
         for g in gaps:
             valid[(t > t[g]) & (t <= t[g + 1] + 3600.0)] = False
+    return valid
+
+
+def _hold_or_exclude_missing(data: dict, warnings: list) -> None:
+    """NaN samples in place: a command (causality input) is held at its last value, since the
+    replay must be driven at every step; a measured signal keeps its NaN (excluded from scoring)."""
     for sig, v in data.items():
         nan = ~np.isfinite(v)
         if nan.any():
@@ -214,12 +278,10 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
                     raise DataError(f"{sig}: every sample is missing")
                 idx = np.where(~nan, np.arange(len(v)), first[0])
                 np.maximum.accumulate(idx, out=idx)
-                data[sig] = v = v[idx]
+                data[sig] = v[idx]
                 warnings.append(f"{sig}: {int(nan.sum())} missing command sample(s) held at the last value")
             else:
                 warnings.append(f"{sig}: {int(nan.sum())} missing sample(s) excluded from scoring")
-    return Samples(str(p), str(start), t, data, warnings, valid,
-                   {sig: col for col, sig in colmap.items()}, heights, ports)
 
 
 def _check_places(heights: dict, columns: dict, mapping) -> None:
