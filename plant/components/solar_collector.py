@@ -237,15 +237,34 @@ class Kind(ComponentKind):
         k = c.storage_ports(st).add_coil(inst, top, bottom)
         k_up = c.storage_ports(st).add_coil(inst, top_up, bottom_up) if valve else None
         T_st = c.s(o["sensor"]) if isinstance(o["sensor"], str) else "0.0"
+        on, m_set = self._emit_control(c, inst, x, p, T_st)
+        beam, dif, S, m, T_sup, Q_loss = self._emit_collector(c, x, p, shift, on, m_set)
+        Q, T_ret = c.var("Q_solar"), c.var("T_ret")
+        side, coil_out = self._emit_coils(c, inst, st, k, k_up, p, m, T_sup)
+        c.emit("volumes",
+               f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X.T_ret}]",
+               f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
+               f"{c.module(__name__)}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
+               f"{x}[{X.E_heat}] += {Q} * h",
+               f"{x}[{X.E_solar}] += ({beam} + {dif}) * {p}[{P.area}] * h")
+        self._emit_signals(c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side)
+
+    def _emit_control(self, c, inst, x, p, T_st):
+        """The pump's inputs, written by the built-in control unless driven from outside."""
         on = c.signal(inst, "on", "1", "input", "solar pump command (0/1); the built-in hysteresis "
                                                 "writes it unless driven from outside")
         m_set = c.signal(inst, "m_flow_set", "kg/s", "input", "solar pump flow when on; the built-in "
                                                              "modulation writes it unless driven from outside")
-        mod, smod = c.module(__name__), c.module(sun.__name__)
+        mod = c.module(__name__)
         on_cmd, m_cmd = c.var("on"), c.var("m_set")
         c.emit("control", f"{on_cmd}, {m_cmd} = {mod}.control({x}, {p}, {on}, {T_st})")
         c.write_command("control", f"{inst.name}.on", on_cmd)
         c.write_command("control", f"{inst.name}.m_flow_set", m_cmd)
+        return on, m_set
+
+    def _emit_collector(self, c, x, p, shift, on, m_set):
+        """Irradiance on the plane, the circuit flow and the collector node's step."""
+        mod, smod = c.module(__name__), c.module(sun.__name__)
         beam, dif, cos_t, S, m, T_sup, Q_loss = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "S", "m_solar",
                                                                      "T_sup", "Q_loss"))
         c.emit("hydraulics",
@@ -254,32 +273,32 @@ class Kind(ComponentKind):
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
                f"{m} = min(max({m_set}, 0.0), {p}[{P.m_flow_max}]) if {on} > 0.5 else 0.0",
                f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})")
-        Q, T_ret = c.var("Q_solar"), c.var("T_ret")
-        if valve:
-            up = c.signal(inst, "upper", "1", "input", "solar three-way valve: 1 = upper coil, 0 = lower coil "
-                                                         "(the rules write it unless driven from outside)")
-            side = c.var("upper")
-            c.emit("hydraulics",
-                   f"{side} = {up} > 0.5",
-                   f"{st}_coil_m[{k}] = 0.0 if {side} else {m}",
-                   f"{st}_coil_m[{k_up}] = {m} if {side} else 0.0",
-                   f"{st}_coil_Tin[{k}] = {T_sup}",
-                   f"{st}_coil_Tin[{k_up}] = {T_sup}",
-                   f"{st}_coil_UA[{k}] = {p}[{P.UA}]",
-                   f"{st}_coil_UA[{k_up}] = {p}[{P.UA_upper}]")
-            coil_out = f"({st}_coil_Tout[{k_up}] if {side} else {st}_coil_Tout[{k}])"
-        else:
+        return beam, dif, S, m, T_sup, Q_loss
+
+    def _emit_coils(self, c, inst, st, k, k_up, p, m, T_sup):
+        """The coil requests of the step; returns (the valve-side local or None, the coil outlet
+        expression)."""
+        if k_up is None:
             c.emit("hydraulics",
                    f"{st}_coil_m[{k}] = {m}",
                    f"{st}_coil_Tin[{k}] = {T_sup}",
                    f"{st}_coil_UA[{k}] = {p}[{P.UA}]")
-            coil_out = f"{st}_coil_Tout[{k}]"
-        c.emit("volumes",
-               f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X.T_ret}]",
-               f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
-               f"{mod}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
-               f"{x}[{X.E_heat}] += {Q} * h",
-               f"{x}[{X.E_solar}] += ({beam} + {dif}) * {p}[{P.area}] * h")
+            return None, f"{st}_coil_Tout[{k}]"
+        up = c.signal(inst, "upper", "1", "input", "solar three-way valve: 1 = upper coil, 0 = lower coil "
+                                                     "(the rules write it unless driven from outside)")
+        side = c.var("upper")
+        c.emit("hydraulics",
+               f"{side} = {up} > 0.5",
+               f"{st}_coil_m[{k}] = 0.0 if {side} else {m}",
+               f"{st}_coil_m[{k_up}] = {m} if {side} else 0.0",
+               f"{st}_coil_Tin[{k}] = {T_sup}",
+               f"{st}_coil_Tin[{k_up}] = {T_sup}",
+               f"{st}_coil_UA[{k}] = {p}[{P.UA}]",
+               f"{st}_coil_UA[{k_up}] = {p}[{P.UA_upper}]")
+        return side, f"({st}_coil_Tout[{k_up}] if {side} else {st}_coil_Tout[{k}])"
+
+    def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side):
+        """Output signals and ledger entries; with the valve, the upper coil's own heat."""
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{X.T}]",
@@ -294,7 +313,7 @@ class Kind(ComponentKind):
                f"{c.ledger_entry(inst, 'fuel')} += ({beam} + {dif}) * {p}[{P.area}] * h",
                f"{c.ledger_entry(inst, 'heat')} += {S} * h",
                f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")
-        if valve:
+        if side is not None:
             e_up = c.state(inst, np.zeros(1), suffix="_valve")
             c.emit("volumes", f"{e_up}[0] += {Q} * h if {side} else 0.0")
             c.emit("signals",
