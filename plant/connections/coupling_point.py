@@ -55,16 +55,7 @@ class Kind(ComponentKind):
         gens = [c.instances[g] for g in o["generators"]]
         cons = [c.instances[k] for k in o["consumers"]]
         forced = sorted(set(o["idle_flow"]) | set(o["pump_coupling"]), key=o["generators"].index)
-        mix = float(o["storage_inlet_mixing"])
-        if not 0.0 <= mix <= 0.5 * st.params.volume:
-            c.problems.append(f"{inst.where} storage_inlet_mixing = {mix:g}: must be 0 … "
-                              f"{0.5 * st.params.volume:g} m3 (half the storage volume)")
-        mix_layers = mix / (st.params.volume / st.params.n_layers)
-        pv = [c.port_layer(inst, "storage_top", st.name), c.port_layer(inst, "storage_bottom", st.name),
-              mix_layers]
-        for g in forced:
-            pv += [float(o["idle_flow"].get(g, 0.0)), float(o["pump_coupling"].get(g, 0.0))]
-        p = c.param(inst, np.array(pv))
+        pv, p, mix_layers = self._params(c, inst, st, forced)
         x_sh, p_sh = c.kinds[c.instances[o["supply"]].kind].views(c, c.instances[o["supply"]])
         x_rh, p_rh = c.kinds[c.instances[o["return"]].kind].views(c, c.instances[o["return"]])
         T_sh, T_rh = c.var("T_sup"), c.var("T_ret")
@@ -72,51 +63,14 @@ class Kind(ComponentKind):
         demand = [c.kinds[k.kind].emit_consumer(c, k, T_sh) for k in cons]
         m_dem = c.var("m_dem")
         c.emit("hydraulics", f"{m_dem} = {' + '.join(m for m, _ in demand) or '0.0'}")
-        hyd = c.module("plant.hydraulics.prescribed")
         if o["hydraulics"] == "pressure_driven":
             flows = self._pressure_driven(c, inst, gens, m_dem, T_rh)
         else:
-            flows = []
-            for g in gens:
-                m_ext = "0.0"
-                if g.name in forced:
-                    j = 3 + 2 * forced.index(g.name)
-                    before = " + ".join(m for m, _ in flows) or "0.0"
-                    m_ext = c.var("m_ext")
-                    c.emit("hydraulics", f"{m_ext} = {hyd}.forced_generator_flows({m_dem}, {before}, "
-                                         f"{p}[{j}], {p}[{j + 1}])")
-                flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
+            flows = self._prescribed(c, gens, forced, p, m_dem, T_rh)
         m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
-        ports = c.storage_ports(st.name)
-        # a plume gets slots for the largest one allowed (half the tank), at least PLUME_SLOTS, so
-        # a plume of any size in a tank of up to 80 layers runs in one compiled plant: each slot
-        # count had been a plant of its own, about 10 s of compiling on a fresh machine for every
-        # plume size and layer count a diagnosis tried; without a plume, the one port slot
-        n_in = max(PLUME_SLOTS, 1 + math.ceil(0.5 * st.params.n_layers)) if mix_layers > 0.0 else 1
-        i0 = ports.add_inlet(inst, "storage_in", None, n_in)
-        j = ports.add_outlet(inst, "storage_out", None)
+        j = self._emit_storage_ports(c, inst, st, pv, p, mix_layers, flows, m_dem, m_gen, m_ch, m_dis,
+                                     T_sh, T_rh)
         a = st.name
-        c.values[f"{a}.fmu_inputs"] = (f"({m_ch} - {m_dis})", T_sh, T_rh)
-        if st.kind == "storage_fmu":
-            for key, want in (("storage_top", 0), ("storage_bottom", st.params.n_layers - 1)):
-                if pv[0 if key == "storage_top" else 1] != want:
-                    c.problems.append(f"{inst.at(key)}: the storage FMU has ports only in its top and "
-                                      f"bottom layers; this height is in layer {pv[0 if key == 'storage_top' else 1]} "
-                                      f"of 0 … {st.params.n_layers - 1}")
-        cmod = c.module(__name__)
-        c.emit("hydraulics",
-               f"{m_gen} = {' + '.join(m for m, _ in flows) or '0.0'}",
-               f"{m_ch}, {m_dis} = {hyd}.split({m_gen}, {m_dem})",
-               f"{cmod}.inlet({a}_in_layer[{i0}:{i0 + n_in}], {a}_in_m[{i0}:{i0 + n_in}], "
-               f"{a}_in_T[{i0}:{i0 + n_in}], {p}[2], x_{a}.shape[0], {m_ch} > 0.0, "
-               f"int({p}[0]) if {m_ch} > 0.0 else int({p}[1]), {m_ch} if {m_ch} > 0.0 else {m_dis}, "
-               f"{T_sh} if {m_ch} > 0.0 else {T_rh})",
-               f"if {m_ch} > 0.0:",
-               f"    {a}_out_layer[{j}] = int({p}[1])",
-               f"    {a}_out_m[{j}] = {m_ch}",
-               "else:",
-               f"    {a}_out_layer[{j}] = int({p}[0])",
-               f"    {a}_out_m[{j}] = {m_dis}")
         pipe = c.module("plant.components.pipe")
         Hs, Hr, Qs, Qr = (c.var(v) for v in ("H_sup", "H_ret", "Q_loss_sup", "Q_loss_ret"))
         h_gen = " + ".join(f"{m} * CP * {T}" for m, T in flows) or "0.0"
@@ -135,6 +89,72 @@ class Kind(ComponentKind):
                f"{self._storage_flow(c, inst, st)} = {m_ch} - {m_dis}",
                f"{c.ledger_entry(inst, 'loss')} += ({Qs} + {Qr}) * h")
 
+    def _params(self, c, inst, st, forced):
+        """The point's parameter slot: storage port layers, inlet mixing in layers, and per forced
+        generator its idle-flow and pump-coupling shares. Returns (values, slot, mixing layers)."""
+        o = inst.options
+        mix = float(o["storage_inlet_mixing"])
+        if not 0.0 <= mix <= 0.5 * st.params.volume:
+            c.problems.append(f"{inst.where} storage_inlet_mixing = {mix:g}: must be 0 … "
+                              f"{0.5 * st.params.volume:g} m3 (half the storage volume)")
+        mix_layers = mix / (st.params.volume / st.params.n_layers)
+        pv = [c.port_layer(inst, "storage_top", st.name), c.port_layer(inst, "storage_bottom", st.name),
+              mix_layers]
+        for g in forced:
+            pv += [float(o["idle_flow"].get(g, 0.0)), float(o["pump_coupling"].get(g, 0.0))]
+        return pv, c.param(inst, np.array(pv)), mix_layers
+
+    def _prescribed(self, c, gens, forced, p, m_dem, T_rh):
+        """The ideal switch: every generator steps with its own pump, a forced one with the flow
+        the earlier ones leave or push through it."""
+        hyd = c.module("plant.hydraulics.prescribed")
+        flows = []
+        for g in gens:
+            m_ext = "0.0"
+            if g.name in forced:
+                j = 3 + 2 * forced.index(g.name)
+                before = " + ".join(m for m, _ in flows) or "0.0"
+                m_ext = c.var("m_ext")
+                c.emit("hydraulics", f"{m_ext} = {hyd}.forced_generator_flows({m_dem}, {before}, "
+                                     f"{p}[{j}], {p}[{j + 1}])")
+            flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
+        return flows
+
+    def _emit_storage_ports(self, c, inst, st, pv, p, mix_layers, flows, m_dem, m_gen, m_ch, m_dis,
+                            T_sh, T_rh):
+        """The storage's inflow (a plume when mixing) and outflow of the step; returns the
+        outflow slot."""
+        ports = c.storage_ports(st.name)
+        # a plume gets slots for the largest one allowed (half the tank), at least PLUME_SLOTS, so
+        # a plume of any size in a tank of up to 80 layers runs in one compiled plant: each slot
+        # count had been a plant of its own, about 10 s of compiling on a fresh machine for every
+        # plume size and layer count a diagnosis tried; without a plume, the one port slot
+        n_in = max(PLUME_SLOTS, 1 + math.ceil(0.5 * st.params.n_layers)) if mix_layers > 0.0 else 1
+        i0 = ports.add_inlet(inst, "storage_in", None, n_in)
+        j = ports.add_outlet(inst, "storage_out", None)
+        a = st.name
+        c.values[f"{a}.fmu_inputs"] = (f"({m_ch} - {m_dis})", T_sh, T_rh)
+        if st.kind == "storage_fmu":
+            for key, want in (("storage_top", 0), ("storage_bottom", st.params.n_layers - 1)):
+                if pv[0 if key == "storage_top" else 1] != want:
+                    c.problems.append(f"{inst.at(key)}: the storage FMU has ports only in its top and "
+                                      f"bottom layers; this height is in layer {pv[0 if key == 'storage_top' else 1]} "
+                                      f"of 0 … {st.params.n_layers - 1}")
+        hyd, cmod = c.module("plant.hydraulics.prescribed"), c.module(__name__)
+        c.emit("hydraulics",
+               f"{m_gen} = {' + '.join(m for m, _ in flows) or '0.0'}",
+               f"{m_ch}, {m_dis} = {hyd}.split({m_gen}, {m_dem})",
+               f"{cmod}.inlet({a}_in_layer[{i0}:{i0 + n_in}], {a}_in_m[{i0}:{i0 + n_in}], "
+               f"{a}_in_T[{i0}:{i0 + n_in}], {p}[2], x_{a}.shape[0], {m_ch} > 0.0, "
+               f"int({p}[0]) if {m_ch} > 0.0 else int({p}[1]), {m_ch} if {m_ch} > 0.0 else {m_dis}, "
+               f"{T_sh} if {m_ch} > 0.0 else {T_rh})",
+               f"if {m_ch} > 0.0:",
+               f"    {a}_out_layer[{j}] = int({p}[1])",
+               f"    {a}_out_m[{j}] = {m_ch}",
+               "else:",
+               f"    {a}_out_layer[{j}] = int({p}[0])",
+               f"    {a}_out_m[{j}] = {m_dis}")
+        return j
 
     def _storage_flow(self, c, inst, st):
         """The signal of the storage's net charging flow: <storage>.m_flow for the first point on a
