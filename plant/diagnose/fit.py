@@ -258,66 +258,85 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     from ..catalogue import CATALOGUE
     from .cut import RADIATOR_OUTPUTS
 
-    p = effect.params[0]
-    t = ctx.rec.time
     tried = []
     nfev = 0
     alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
         if CATALOGUE.signal(s).unit not in effect.signal_units or (only is not None and s != only):
             continue
-        c = common_mode(ctx, nominal_sim, j)
-        y0 = nominal_sim[:, j] + (c if c is not None else 0.0)
-        m = ctx.train & ctx.ok[:, j]
-        if m.sum() < 10:
-            continue
-        # a storage sensor's place within its tolerance is fitted again with the candidate
-        # (sensor_height.py): the twin's reading before the nominal's shift
-        hf = ctx.heights.get(s) if c is not None else None
-        if hf is not None:
-            y0 = y0 - hf.shift * hf.g
-
-        def fit_on(y0, m=m, j=j, hf=hf):  # y0: the signal's first len(y0) samples
-            n = len(y0)
-            mm, meas, tn = m[:n], ctx.meas[:n, j], t[:n]
-
-            def f(v):
-                return float(np.mean((meas[mm] - placed(meas, effect.apply(tn, y0, [v]), mm, hf)[mm]) ** 2))
-            v = effect.solve(meas - y0, mm, hf)
-            if v is not None:
-                v = float(np.clip(v, p.lo, p.hi))
-                return v, f(v), 1, f
-            return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
-
-        y_before = placed(ctx.meas[:, j], y0, m, hf)
-        v, J, k, f = fit_on(y0)
+        one, k = _try_signal(effect, ctx, nominal_sim, replayer, j, s in alone)
         nfev += k
-        if s in alone:
-            # the radiator replayed alone: its rating, water content and element count are
-            # re-fitted jointly with the candidate (a larger radiator delays its return too:
-            # calibrated without the candidate it absorbs part of a sensor's delay). Each radiator
-            # the re-fit tries takes the candidate's best value for it (one parameter over a
-            # return: cheap), so the pair is fitted as one; alternating fits crept towards it
-            # (labsim spring, a 600 s delay: 303, 395, 459, 501, 529, 546 s in six alternations)
-            def joint(y, m=m & replayer.circuit_flowing(settled=True), fit_on=fit_on):
-                return effect.apply(t[:len(y)], y, [fit_on(y, m)[0]])
-
-            vals, N = replayer.refit_radiator(joint, ctx.train)
-            y0 = replayer.radiator_return(vals, N, ctx.nominal.pipe)
-            v, J, k, f = fit_on(y0)
-            nfev += k
-        J0 = float(np.mean((ctx.meas[m, j] - y_before[m]) ** 2))
-        red = (J0 - J) / max(J0, 1e-12)  # the share of the signal's own residual the effect removes
-        # a storage sensor's share is of its residual relative to its neighbours, the return of a
-        # subsystem replayed alone of its residual there, another signal's of its whole residual
-        # (a structural bias included): a local one whose share would pass LOCAL_GAIN goes first
-        local = c is not None or s in alone
-        key = (local and red >= LOCAL_GAIN, red)
-        tried.append(_Tried(key, j, v, f, y0, local, y_before, J0 - J,
-                            s.rpartition(".T_sensor_")[0] if c is not None else None))
+        if one is not None:
+            tried.append(one)
     if not tried:
         return Result(effect.id, effect.component, effect.kind, False, "no eligible measured signal",
                       effect=effect)
+    return _signal_result(effect, ctx, nominal_sim, _best_tried(tried), nfev, alone)
+
+
+def _fit_on(effect, ctx, j, hf, y0, m):
+    """The candidate fitted on signal j's first len(y0) samples, acting on the twin's value y0,
+    on mask m -> (value, training MSE, evaluations, the MSE as a function of the value)."""
+    p = effect.params[0]
+    n = len(y0)
+    mm, meas, tn = m[:n], ctx.meas[:n, j], ctx.rec.time[:n]
+
+    def f(v):
+        return float(np.mean((meas[mm] - placed(meas, effect.apply(tn, y0, [v]), mm, hf)[mm]) ** 2))
+    v = effect.solve(meas - y0, mm, hf)
+    if v is not None:
+        v = float(np.clip(v, p.lo, p.hi))
+        return v, f(v), 1, f
+    return scalar_search(f, p, n_grid=5, maxiter=8) + (f,)
+
+
+def _try_signal(effect, ctx, nominal_sim, replayer, j, alone: bool) -> tuple[_Tried | None, int]:
+    """The candidate fitted on measured signal j on the training window -> (_Tried, or None with
+    fewer than 10 usable training samples; evaluations). alone: j is a return of the radiator
+    replayed alone."""
+    s = ctx.measured[j]
+    c = common_mode(ctx, nominal_sim, j)
+    y0 = nominal_sim[:, j] + (c if c is not None else 0.0)
+    m = ctx.train & ctx.ok[:, j]
+    if m.sum() < 10:
+        return None, 0
+    # a storage sensor's place within its tolerance is fitted again with the candidate
+    # (sensor_height.py): the twin's reading before the nominal's shift
+    hf = ctx.heights.get(s) if c is not None else None
+    if hf is not None:
+        y0 = y0 - hf.shift * hf.g
+
+    def fit_on(y0, m=m):
+        return _fit_on(effect, ctx, j, hf, y0, m)
+
+    y_before = placed(ctx.meas[:, j], y0, m, hf)
+    v, J, nfev, f = fit_on(y0)
+    if alone:
+        # the radiator replayed alone: its rating, water content and element count are
+        # re-fitted jointly with the candidate (a larger radiator delays its return too:
+        # calibrated without the candidate it absorbs part of a sensor's delay). Each radiator
+        # the re-fit tries takes the candidate's best value for it (one parameter over a
+        # return: cheap), so the pair is fitted as one; alternating fits crept towards it
+        # (labsim spring, a 600 s delay: 303, 395, 459, 501, 529, 546 s in six alternations)
+        def joint(y, m=m & replayer.circuit_flowing(settled=True)):
+            return effect.apply(ctx.rec.time[:len(y)], y, [fit_on(y, m)[0]])
+
+        vals, N = replayer.refit_radiator(joint, ctx.train)
+        y0 = replayer.radiator_return(vals, N, ctx.nominal.pipe)
+        v, J, k, f = fit_on(y0)
+        nfev += k
+    J0 = float(np.mean((ctx.meas[m, j] - y_before[m]) ** 2))
+    red = (J0 - J) / max(J0, 1e-12)  # the share of the signal's own residual the effect removes
+    # a storage sensor's share is of its residual relative to its neighbours, the return of a
+    # subsystem replayed alone of its residual there, another signal's of its whole residual
+    # (a structural bias included): a local one whose share would pass LOCAL_GAIN goes first
+    local = c is not None or alone
+    key = (local and red >= LOCAL_GAIN, red)
+    return _Tried(key, j, v, f, y0, local, y_before, J0 - J,
+                  s.rpartition(".T_sensor_")[0] if c is not None else None), nfev
+
+
+def _best_tried(tried: list) -> _Tried:
     best = max(tried, key=lambda x: x.key)
     if best.tank is not None and best.key[0]:
         # among the sensors of that storage that pass, the one whose residual it removes most in
@@ -325,28 +344,40 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
         # an offset removes as wholly (by the share alone, labsim's +1.5 K on sensor 5 was once
         # fitted as -0.72 K on sensor 6)
         best = max((x for x in tried if x.tank == best.tank and x.key[0]), key=lambda x: x.removed)
+    return best
+
+
+def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set) -> Result:
+    """The chosen signal's fit over the whole recording as a Result (its standard error; judged
+    on its own residual: Result.local)."""
+    p = effect.params[0]
     j, v, f, y0, local, y_before = best.j, best.value, best.cost, best.y0, best.local, best.y_before
     sim = nominal_sim.copy()
     m = ctx.train & ctx.ok[:, j]
     hf = ctx.heights.get(ctx.measured[j]) if best.tank is not None else None
-    sim[:, j] = placed(ctx.meas[:, j], effect.apply(t, y0, [v]), m, hf)
+    sim[:, j] = placed(ctx.meas[:, j], effect.apply(ctx.rec.time, y0, [v]), m, hf)
     se = effect.stderr(ctx.meas[m, j] - sim[m, j], ctx.n_eff(ctx.train))
     if se is None:
         se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train))
-    judged_on = None
-    if local:
-        h = ctx.held & ctx.ok[:, j]
-        e0, e1 = ctx.meas[h, j] - y_before[h], ctx.meas[h, j] - sim[h, j]
-        judged_on = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
-                   "heldout_rms_after": float(np.sqrt(np.mean(e1 ** 2))),
-                   "gain": 1.0 - float(np.mean(e1 ** 2)) / max(float(np.mean(e0 ** 2)), 1e-12),
-                   "limit": ctx.limit(j),
-                   "neighbours": [ctx.measured[k] for k in neighbours(ctx, j)]}
-        if ctx.measured[j] in alone:
-            # calibrated on this very signal, the subsystem alone has no structural allowance to
-            # keep: its residual is a mismatch above the sensor's noise (3 sigma)
-            judged_on["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
-            judged_on["limit"] = ctx.limit(j, tol=0.0)
+    judged_on = _judged_on(ctx, j, y_before, sim, alone) if local else None
     return Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
                   train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                   evaluations=nfev, sim=sim, effect=effect, local=judged_on)
+
+
+def _judged_on(ctx, j, y_before, sim, alone: set) -> dict:
+    """Result.local of a sensor candidate judged on signal j's own residual: its held-out RMS
+    before and after, the share removed, the mismatch limit and the neighbours it is relative to."""
+    h = ctx.held & ctx.ok[:, j]
+    e0, e1 = ctx.meas[h, j] - y_before[h], ctx.meas[h, j] - sim[h, j]
+    judged_on = {"heldout_rms_before": float(np.sqrt(np.mean(e0 ** 2))),
+                 "heldout_rms_after": float(np.sqrt(np.mean(e1 ** 2))),
+                 "gain": 1.0 - float(np.mean(e1 ** 2)) / max(float(np.mean(e0 ** 2)), 1e-12),
+                 "limit": ctx.limit(j),
+                 "neighbours": [ctx.measured[k] for k in neighbours(ctx, j)]}
+    if ctx.measured[j] in alone:
+        # calibrated on this very signal, the subsystem alone has no structural allowance to
+        # keep: its residual is a mismatch above the sensor's noise (3 sigma)
+        judged_on["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
+        judged_on["limit"] = ctx.limit(j, tol=0.0)
+    return judged_on
