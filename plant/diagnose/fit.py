@@ -10,7 +10,8 @@ to its neighbours, common_mode).
 Judging and selection: verdict.py.
 
 Calibration of the nominal structure (the re-fit, the storage scheme, identifiability):
-calibration.py; bounded searches: bounded.py.
+calibration.py; bounded searches: bounded.py; a simulate candidate's memoised training cost and
+its passes over the parameters: sim_fit.py.
 """
 from __future__ import annotations
 
@@ -20,11 +21,10 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from . import sensor_height
-from .bounded import descent, from_u, scalar_search, to_u
-from .calibration import STORAGE_SCHEMES, file_scheme
+from .bounded import descent, scalar_search
+from .sim_fit import TrainingCost, along, local_pass, rechoose_scheme
 
 JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
 
@@ -100,90 +100,41 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     left to the candidate."""
     params = effect.params
     free = effect.fitted(ctx)
-    t_end = float(ctx.rec.time[ctx.train].max())
-    cache = {}
     own = set(effect.overrides([p.nominal for p in params]))
     nom = [q for q in (nominal or []) if q.name not in own] if JOINT_REFIT else []
     ne = len(params)
-
-    scheme = {}  # the storage scheme chosen again with the candidate (STORAGE_SCHEMES), if another
-
-    def ov(theta):
-        d = {q.name: float(v) for q, v in zip(nom, theta[ne:])}
-        d.update(scheme)
-        d.update(effect.overrides(list(theta[:ne])))
-        return d
-
-    def F(theta):
-        key = tuple(round(float(v), 12) for v in theta) + tuple(sorted(scheme.items()))
-        if key not in cache:
-            rows = replayer.run(ov(theta), until=t_end).rows
-            cache[key] = ctx.cost(rows[:, ctx.cols], ctx.train)
-        return cache[key]
-
-    allp = list(params) + nom
+    F = TrainingCost(effect, ctx, replayer, nom)
     # the candidate is fitted with the nominals at their FILE values first (the baseline's
     # re-fit has already bent them towards the missing effect: starting there, the candidate
     # came out 16 % small on a 40 W/K storage loss and the joint pass stalled at 10x the cost)
     theta = [p.nominal for p in params] + [q.nominal for q in nom]
     J = math.nan
-
-    def along(i):
-        def f(v):
-            th = list(theta)
-            th[i] = v
-            return F(th)
-        return f
-
-    def local_pass():
-        nonlocal J
-        for i in free:
-            p = params[i]
-            lo, hi = to_u(p, p.lo), to_u(p, p.hi)
-            u = to_u(p, theta[i])
-            d = 0.15 * (hi - lo)
-            f = along(i)
-            res = minimize_scalar(lambda x: f(from_u(p, x)), bounds=(max(lo, u - d), min(hi, u + d)),
-                                  method="bounded", options={"xatol": (hi - lo) * 2e-3, "maxiter": 8})
-            if res.fun < J:
-                theta[i], J = from_u(p, res.x), float(res.fun)
-
     for i in free:
-        theta[i], J, _ = scalar_search(along(i), params[i])
+        theta[i], J, _ = scalar_search(along(F, theta, i), params[i])
     if len(free) > 1:
-        local_pass()
+        J = local_pass(F, params, free, theta, J)
     if nom:
-        th, Jn, _ = descent(F, allp, theta, range(ne, ne + len(nom)), maxiter=5)
+        th, Jn, _ = descent(F, list(params) + nom, theta, range(ne, ne + len(nom)), maxiter=5)
         if Jn < J:
             theta[:], J = th, Jn
-            local_pass()
+            J = local_pass(F, params, free, theta, J)
     if "storage" in replayer.instances() - replayer.calibrated:
         # a candidate acting on the storage (a port plume) trades off against how finely the
         # tank resolves its thermocline: the scheme is chosen again with the candidate fitted
-        best = dict(scheme), J
-        for _, sc in STORAGE_SCHEMES:
-            scheme.clear()
-            scheme.update(sc or file_scheme(replayer))  # the file's: undo the nominal's choice
-            Js = F(theta)
-            if Js < best[1] - 1e-12:
-                best = dict(scheme), Js
-        scheme.clear()
-        scheme.update(best[0])
-        if best[1] < J:
-            J = best[1]
-            local_pass()
+        Js = rechoose_scheme(F, replayer, theta, J)
+        if Js < J:
+            J = local_pass(F, params, free, theta, Js)
     n_eff = ctx.n_eff(ctx.train)
-    se = [_stderr(along(i), params[i], theta[i], J, n_eff) if i in free else math.nan
+    se = [_stderr(along(F, theta, i), params[i], theta[i], J, n_eff) if i in free else math.nan
           for i in range(len(params))]
-    run = replayer.run(ov(theta))
+    run = replayer.run(F.overrides(theta))
     rows = run.rows
     sim = rows[:, ctx.cols]
-    r = Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
-               train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
-               evaluations=len(cache) + 1, sim=sim, rows=rows, effect=effect,
-               nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **scheme},
-               pipe=dict(run.pipe), k=len(free))
-    return r
+    return Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
+                  train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
+                  evaluations=len(F.cache) + 1, sim=sim, rows=rows, effect=effect,
+                  nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **F.scheme},
+                  pipe=dict(run.pipe), k=len(free))
 
 
 NEAR = 0.15  # relative tank height within which a sensor is a neighbour (10 sensors: 0.1 apart)

@@ -1,0 +1,77 @@
+"""The pieces of fit.fit_simulate: a simulate candidate's training cost, memoised, and the passes
+over its parameters after the first coordinate search (a local Brent pass, the storage scheme
+chosen again with the candidate)."""
+from __future__ import annotations
+
+from scipy.optimize import minimize_scalar
+
+from .bounded import from_u, to_u
+from .calibration import STORAGE_SCHEMES, file_scheme
+
+
+class TrainingCost:
+    """A simulate candidate's training cost as a function of theta (its own parameters, then the
+    jointly re-fitted nominals nom), each replay of the training window memoised: the searches
+    come back to the same points, and each replay is the expensive part."""
+
+    def __init__(self, effect, ctx, replayer, nom):
+        self.effect, self.ctx, self.replayer, self.nom = effect, ctx, replayer, nom
+        self.ne = len(effect.params)
+        self.t_end = float(ctx.rec.time[ctx.train].max())
+        self.cache = {}
+        self.scheme = {}  # the storage scheme chosen again with the candidate (STORAGE_SCHEMES), if another
+
+    def overrides(self, theta) -> dict:
+        """The house overrides of theta: the candidate's own keys win over a nominal's."""
+        d = {q.name: float(v) for q, v in zip(self.nom, theta[self.ne:])}
+        d.update(self.scheme)
+        d.update(self.effect.overrides(list(theta[:self.ne])))
+        return d
+
+    def __call__(self, theta) -> float:
+        key = tuple(round(float(v), 12) for v in theta) + tuple(sorted(self.scheme.items()))
+        if key not in self.cache:
+            rows = self.replayer.run(self.overrides(theta), until=self.t_end).rows
+            self.cache[key] = self.ctx.cost(rows[:, self.ctx.cols], self.ctx.train)
+        return self.cache[key]
+
+
+def along(F, theta: list, i: int):
+    """F along parameter i, the others as theta holds them when it is called (theta is updated in
+    place as the fit proceeds)."""
+    def f(v):
+        th = list(theta)
+        th[i] = v
+        return F(th)
+    return f
+
+
+def local_pass(F, params, free, theta: list, J: float) -> float:
+    """Each free parameter again by bounded Brent within +-15 % of its range around its value,
+    the others held; theta updated in place where the cost improves on J -> the cost."""
+    for i in free:
+        p = params[i]
+        lo, hi = to_u(p, p.lo), to_u(p, p.hi)
+        u = to_u(p, theta[i])
+        d = 0.15 * (hi - lo)
+        f = along(F, theta, i)
+        res = minimize_scalar(lambda x: f(from_u(p, x)), bounds=(max(lo, u - d), min(hi, u + d)),
+                              method="bounded", options={"xatol": (hi - lo) * 2e-3, "maxiter": 8})
+        if res.fun < J:
+            theta[i], J = from_u(p, res.x), float(res.fun)
+    return J
+
+
+def rechoose_scheme(F, replayer, theta: list, J: float) -> float:
+    """The storage scheme (STORAGE_SCHEMES) with the lowest cost at theta set in F.scheme (the one
+    it had unless another is lower by more than 1e-12) -> that cost (J when it stays)."""
+    best = dict(F.scheme), J
+    for _, sc in STORAGE_SCHEMES:
+        F.scheme.clear()
+        F.scheme.update(sc or file_scheme(replayer))  # the file's: undo the nominal's choice
+        Js = F(theta)
+        if Js < best[1] - 1e-12:
+            best = dict(F.scheme), Js
+    F.scheme.clear()
+    F.scheme.update(best[0])
+    return best[1]
