@@ -168,23 +168,52 @@ def select(results, ctx, nominal_sim, affected):
     unexplained = "unexplained_mismatch" if beyond else "no_missing_physics"
     if not acc:
         return unexplained, None, [], 0.0, results
+    idx_aff = [ctx.measured.index(s) for s in affected]
+    results, first, acc = _outside_g14_not_named(results, acc, ctx, nominal_sim, idx_aff)
+    if not acc:
+        return "unexplained_mismatch", first, [], explained_share(
+            ctx, nominal_sim, first.sim, moved(ctx, nominal_sim, first.sim, idx_aff)), results
+    best = _parsimonious(acc)
+    idx = _answers_for(ctx, nominal_sim, best, affected)
+    explained = _explained(ctx, nominal_sim, best, idx)
+    twins = _twins(ctx, best, acc)
+    # what stays beyond the replay's accuracy on signals the named effect does not answer for is
+    # another mismatch (reported: report.json locate.beyond_tolerance), not a reason to doubt it
+    left = [s for s in beyond_tolerance(ctx, best.sim, ctx.held) if ctx.measured.index(s) in idx]
+    if explained < EXPLAIN and left:
+        return "unexplained_mismatch", best, twins, explained, results
+    return "missing_physics", best, twins, explained, results
+
+
+def _outside_g14_not_named(results, acc, ctx, nominal_sim, idx_aff):
+    """-> (results, with the reason added to each accepted candidate that leaves a signal outside
+    Guideline 14; the first of acc as it stands in those results; the accepted candidates that
+    do not, ranked by held-out gain)."""
     # a candidate that leaves an energy or flow signal it moves outside Guideline 14's hourly
     # acceptance has not explained that signal (G14 is the calibration criterion for metered
     # energy and flow, beyond_tolerance): it is not named; the next accepted one is tried
-    idx_aff = [ctx.measured.index(s) for s in affected]
     left = {r.id: g14_left(ctx, nominal_sim, r, idx_aff) for r in acc}
     results = [dataclasses.replace(r, reason=(r.reason or "") + f"; leaves {', '.join(left[r.id])} outside "
                                    "Guideline 14: not named") if r.accepted and left[r.id] else r for r in results]
     first = next(r for r in results if r.id == acc[0].id)
     acc = [r for r in results if r.accepted and not left[r.id]]
     acc.sort(key=lambda r: -r.held_gain)
-    if not acc:
-        return "unexplained_mismatch", first, [], explained_share(
-            ctx, nominal_sim, first.sim, moved(ctx, nominal_sim, first.sim, idx_aff)), results
+    return results, first, acc
+
+
+def _parsimonious(acc):
+    """The first of acc (ranked by held-out gain), replaced by a candidate with fewer fitted
+    parameters whose gain is within PARSIMONY of it (neither judged on a residual of its own,
+    Result.local)."""
     best = acc[0]
     for r in acc[1:]:
         if r.k < best.k and r.held_gain >= acc[0].held_gain - PARSIMONY and r.local is None and best.local is None:
             best = r
+    return best
+
+
+def _answers_for(ctx, nominal_sim, best, affected) -> list:
+    """The columns of the signals the named candidate answers for (select)."""
     idx = [ctx.measured.index(s) for s in affected]
     if best.local is not None and best.kind == "signal":
         # a sensor candidate judged on its own residual (relative to its neighbours, or on a
@@ -194,14 +223,24 @@ def select(results, ctx, nominal_sim, affected):
         # a plant candidate acts on the subsystems it moves; a sensor candidate on any other
         # signal answers for all of it
         idx = moved(ctx, nominal_sim, best.sim, idx)
+    return idx
+
+
+def _explained(ctx, nominal_sim, best, idx) -> float:
+    """The share of the held-out excess the named candidate removes on the signals idx."""
     if best.local is not None and best.kind == "signal":
         # a sensor candidate judged on its own residual (relative to its neighbours, or on a
         # subsystem replayed alone) explains the share of that residual's excess over its limit
         d = best.local
-        explained = excess_removed(np.array([d["heldout_rms_before"] ** 2]), np.array([d["heldout_rms_after"] ** 2]),
-                                   np.array([d["limit"] ** 2]))
-    else:
-        explained = explained_share(ctx, nominal_sim, best.sim, idx)
+        return excess_removed(np.array([d["heldout_rms_before"] ** 2]), np.array([d["heldout_rms_after"] ** 2]),
+                              np.array([d["limit"] ** 2]))
+    return explained_share(ctx, nominal_sim, best.sim, idx)
+
+
+def _twins(ctx, best, acc) -> list:
+    """The ids of the accepted candidates the sensors cannot tell apart from best: held-out cost
+    within 25 % (+0.02) of its, fitted simulation differing from its by no more than its held-out
+    cost (at least 0.02); of a sensor effect judged on its own residual, only effects on its sensor."""
     twins = []
     for r in acc:
         if r is best:
@@ -215,12 +254,7 @@ def select(results, ctx, nominal_sim, affected):
         d = _sim_distance(ctx, best.sim, r.sim)
         if r.held_cost <= 1.25 * best.held_cost + 0.02 and d <= max(best.held_cost, 0.02):
             twins.append(r.id)
-    # what stays beyond the replay's accuracy on signals the named effect does not answer for is
-    # another mismatch (reported: report.json locate.beyond_tolerance), not a reason to doubt it
-    left = [s for s in beyond_tolerance(ctx, best.sim, ctx.held) if ctx.measured.index(s) in idx]
-    if explained < EXPLAIN and left:
-        return "unexplained_mismatch", best, twins, explained, results
-    return "missing_physics", best, twins, explained, results
+    return twins
 
 
 MOVED = 0.10
