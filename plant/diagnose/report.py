@@ -51,43 +51,17 @@ def _clean(o):
 
 
 def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explained, loc, terms, warnings):
+    """report.json's content from the selection (verdict.select) and the localisation (loc), its
+    finding included; pipeline.build_report adds the calibration, the further effects and the
+    replay's own fits. sim0 / nominal_rows: the nominal twin's measured signals / catalogue rows
+    (before); best: the named model (every chosen effect), whose are the after (the nominal's
+    again without one)."""
     after = best.sim if best is not None else sim0
     after_rows = best.rows if (best is not None and best.rows is not None) else nominal_rows
-    mb_all, ma_all = locate.metrics(ctx, sim0, ctx.train | ctx.held), locate.metrics(ctx, after, ctx.train | ctx.held)
-    mb_h, ma_h = locate.metrics(ctx, sim0, ctx.held), locate.metrics(ctx, after, ctx.held)
-    whole = ctx.train | ctx.held
-    gb, ga = locate.ashrae_hourly(ctx, sim0, whole), locate.ashrae_hourly(ctx, after, whole)
-    signals = {}
-    for s in ctx.measured:
-        if s not in mb_all:
-            continue
-        g14 = {"before": gb.get(s), "after": ga.get(s)}
-        signals[s] = {"unit": CATALOGUE.signal(s).unit,
-                      "rmse_before": mb_all[s]["rmse"], "rmse_after": ma_all[s]["rmse"],
-                      "heldout_rmse_before": mb_h.get(s, {}).get("rmse"),
-                      "heldout_rmse_after": ma_h.get(s, {}).get("rmse"),
-                      "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
-                      "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"],
-                      "subsystem": subsystem(s), "guideline_14_hourly": g14}
-    # the affected signals: a sensor effect's own signal; those a plant effect moves (beyond the
-    # mismatch tolerance), not the structural residual elsewhere it does not touch; else those
-    # mismatched
-    affected = loc["mismatched_signals"]
-    if best is not None and best.signal:
-        affected = [best.signal]
-        if best.rows is not None:  # a plant effect joined the sensor effect: the signals it moves too
-            affected += [s for s in locate.moved_signals(ctx, sim0, after, ctx.held) if s != best.signal]
-    elif best is not None:
-        affected = locate.moved_signals(ctx, sim0, after, ctx.held) or affected
+    signals = _signal_figures(ctx, sim0, after)
+    affected = _affected(ctx, sim0, after, best, loc["mismatched_signals"])
     by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(s) != "K"))
-    energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
-    energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
-    if best is not None and best.kind == "signal" and best.rows is None:
-        for e in (energy, energy_held):
-            for d in e.values():  # sensor effects (alone) do not change the heat flows
-                d["simulated_after_kWh"] = d["simulated_before_kWh"]
-                if "error_before_pct" in d:
-                    d["error_after_pct"] = d["error_before_pct"]
+    energy, energy_held = _energies(ctx, nominal_rows, after_rows, best)
     rep = {
         "schema": SCHEMA,
         "house": house,
@@ -117,14 +91,7 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
         "cost": {"nominal_train": ctx.cost(sim0, ctx.train), "nominal_heldout": ctx.cost(sim0, ctx.held),
                  "noise_floor": ctx.noise_cost()},
         "signals": signals,
-        "guideline_14": {"figures": "hourly CV(RMSE) and NMBE per signal, before/after, over the training and "
-                                    "held-out windows (scored samples only)",
-                         "cvrmse": "100 / mean(m) * sqrt(sum((m - s)^2) / (n - p))",
-                         "nmbe": "100 / mean(m) * sum(m - s) / (n - p)",
-                         "n": "hours with at least half of their samples scored", "p": locate.ASHRAE_P,
-                         "sign": "measured - simulated", "acceptance_pct": {"cvrmse": locate.ASHRAE_CV_MAX,
-                                                                             "nmbe": locate.ASHRAE_NMBE_MAX},
-                         "temperatures": "reported, not judged (the figures depend on the zero of degC)"},
+        "guideline_14": _guideline_14_legend(),
         "energy": energy,
         "energy_heldout": energy_held,
         "locate": loc,
@@ -133,6 +100,67 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     }
     rep["finding"] = finding(rep, ctx, best)
     return _clean(rep)
+
+
+def _signal_figures(ctx, sim0, after) -> dict:
+    """report.json `signals`: per measured signal with figures, RMSE (whole and held-out), CV(RMSE)
+    and NMBE before and after, its subsystem and the hourly Guideline 14 figures."""
+    mb_all, ma_all = locate.metrics(ctx, sim0, ctx.train | ctx.held), locate.metrics(ctx, after, ctx.train | ctx.held)
+    mb_h, ma_h = locate.metrics(ctx, sim0, ctx.held), locate.metrics(ctx, after, ctx.held)
+    whole = ctx.train | ctx.held
+    gb, ga = locate.ashrae_hourly(ctx, sim0, whole), locate.ashrae_hourly(ctx, after, whole)
+    signals = {}
+    for s in ctx.measured:
+        if s not in mb_all:
+            continue
+        g14 = {"before": gb.get(s), "after": ga.get(s)}
+        signals[s] = {"unit": CATALOGUE.signal(s).unit,
+                      "rmse_before": mb_all[s]["rmse"], "rmse_after": ma_all[s]["rmse"],
+                      "heldout_rmse_before": mb_h.get(s, {}).get("rmse"),
+                      "heldout_rmse_after": ma_h.get(s, {}).get("rmse"),
+                      "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
+                      "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"],
+                      "subsystem": subsystem(s), "guideline_14_hourly": g14}
+    return signals
+
+
+def _affected(ctx, sim0, after, best, mismatched) -> list:
+    """report.json `affected_signals`: a sensor effect's own signal; those a plant effect moves
+    (beyond the mismatch tolerance), not the structural residual elsewhere it does not touch; else
+    those mismatched."""
+    affected = mismatched
+    if best is not None and best.signal:
+        affected = [best.signal]
+        if best.rows is not None:  # a plant effect joined the sensor effect: the signals it moves too
+            affected += [s for s in locate.moved_signals(ctx, sim0, after, ctx.held) if s != best.signal]
+    elif best is not None:
+        affected = locate.moved_signals(ctx, sim0, after, ctx.held) or affected
+    return affected
+
+
+def _energies(ctx, nominal_rows, after_rows, best) -> tuple[dict, dict]:
+    """report.json `energy` and `energy_heldout` (the whole recording, the held-out window)."""
+    energy = locate.energy(ctx, nominal_rows, after_rows if best is not None else None)
+    energy_held = locate.energy(ctx, nominal_rows, after_rows if best is not None else None, mask=ctx.held)
+    if best is not None and best.kind == "signal" and best.rows is None:
+        for e in (energy, energy_held):
+            for d in e.values():  # sensor effects (alone) do not change the heat flows
+                d["simulated_after_kWh"] = d["simulated_before_kWh"]
+                if "error_before_pct" in d:
+                    d["error_after_pct"] = d["error_before_pct"]
+    return energy, energy_held
+
+
+def _guideline_14_legend() -> dict:
+    """report.json `guideline_14`: how the per-signal Guideline 14 figures are computed and judged."""
+    return {"figures": "hourly CV(RMSE) and NMBE per signal, before/after, over the training and "
+                       "held-out windows (scored samples only)",
+            "cvrmse": "100 / mean(m) * sqrt(sum((m - s)^2) / (n - p))",
+            "nmbe": "100 / mean(m) * sum(m - s) / (n - p)",
+            "n": "hours with at least half of their samples scored", "p": locate.ASHRAE_P,
+            "sign": "measured - simulated", "acceptance_pct": {"cvrmse": locate.ASHRAE_CV_MAX,
+                                                                "nmbe": locate.ASHRAE_NMBE_MAX},
+            "temperatures": "reported, not judged (the figures depend on the zero of degC)"}
 
 
 def nominal_refit(nref, ctx, sim0, best) -> dict:
