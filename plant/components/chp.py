@@ -132,13 +132,9 @@ def _water(Tw, P, m, T_in, C, dt):
     return dT, T_out
 
 
-@njit(cache=True)
-def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
-    """Advance the CHP by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
-    C = CP * RHO * p[P.V_water]
-    Tw = x[X.T_w]
-    on_eff = on > 0.5 and T_in < p[P.T_ret_max]
-    # switching
+@njit(cache=True, inline="always")
+def _switch(t, x, p, on_eff):
+    """Start (downtime, cold or warm start-up length) or stop (the pump flow the cool-down scales)."""
     if on_eff and x[X.running] < 0.5:
         D = t - x[X.t_off]
         x[X.t_on] = t
@@ -150,92 +146,137 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
         x[X.running] = 0.0
         x[X.t_off] = t
         x[X.m_stop] = x[X.m_pump]  # the pump flow of the last running step
+
+
+@njit(cache=True, inline="always")
+def _first_heat(tab_start, t_start, p):
+    """(tau0, tau_pos, T_first): the last zero row of col 4 before the first positive one, that
+    positive row's time and supply temperature; a start-up ending before it warms to T_sup_set."""
+    n = tab_start.shape[0]
+    i0 = n - 1
+    for i in range(n - 1):
+        if tab_start[i + 1, 3] > 0.0:
+            i0 = i
+            break
+    tau0 = tab_start[i0, 0]
+    tau_pos = tab_start[min(i0 + 1, n - 1), 0]
+    T_first = tab_start[min(i0 + 1, n - 1), 5]
+    if t_start <= tau0:
+        tau0 = t_start
+        T_first = p[P.T_sup_set]
+    return tau0, tau_pos, T_first
+
+
+@njit(cache=True, inline="always")
+def _start_up(tau, t_start, dt, p, tab_start, eta_tot, H, P_fuel_nom, C, Tw, T_in):
+    """The start-up table's step: returns (m_pump, P_el, P_fuel, P_heat)."""
     m_pump = 0.0
-    P_el = 0.0
-    P_fuel = 0.0
-    P_heat = 0.0
-    mode = 0.0
-    if x[X.running] > 0.5:
-        tau = t - x[X.t_on]
-        t_start = x[X.t_start]
-        target_y = 1.0 if tau < t_start else min(1.0, max(0.0, y_set))
-        dy = target_y - x[X.y]
-        lim = p[P.slew] * dt
-        x[X.y] += min(lim, max(-lim, dy))
-        m = min(1.0, max(p[P.m_min], x[X.y]))
-        H = max(0.0, x[X.f0] - tau / p[P.t_steady])
-        Tk = max(T_in, p[P.T_ret_min]) + 273.15
-        eta_tot = interp2(Tk, m, tab_eff) * p[P.eta_tot_max] / 0.90
-        P_fuel_nom = p[P.P_el_max] / p[P.eta_el_max]
-        if tau < t_start:
-            mode = 1.0
-            ts = tab_start[:, 0]
-            P_el = interp1(tau, ts, tab_start[:, 1]) * p[P.P_el_max]
-            P_fuel = interp1(tau, ts, tab_start[:, 4]) * P_fuel_nom
-            f_q = interp1(tau, ts, tab_start[:, 3])
-            P_tab = max(0.0, f_q * P_fuel_nom * (eta_tot - p[P.eta_el_max]) - p[P.P_heatup] * H)
-            surplus = max(0.0, P_fuel - max(P_el, 0.0) - P_tab)
-            # first tabulated heat: last zero row of col 4 before the first positive one
-            n = tab_start.shape[0]
-            i0 = n - 1
-            for i in range(n - 1):
-                if tab_start[i + 1, 3] > 0.0:
-                    i0 = i
-                    break
-            tau0 = tab_start[i0, 0]
-            tau_pos = tab_start[min(i0 + 1, n - 1), 0]
-            T_first = tab_start[min(i0 + 1, n - 1), 5]
-            if t_start <= tau0:
-                tau0 = t_start
-                T_first = p[P.T_sup_set]
-            if tau < tau0:
-                # coolant pre-warming, no flow
-                P_pre = C * (T_first - Tw) / max(tau0 - tau, dt)
-                P_pre = min(surplus, max(0.0, P_pre))
-                P_heat = P_pre
-            else:
-                T_tgt = T_first if tau + dt < tau_pos else interp1(tau + dt, ts, tab_start[:, 5])
-                T_tgt = max(T_in + 1.0, T_tgt)
-                P_pre = min(surplus, max(0.0, C * (T_tgt - Tw) / dt))
-                P_heat = P_tab + P_pre
-                if P_tab > 0.0:
-                    dTs = max(T_tgt - T_in, 1.0)
-                    tc = max(p[P.tau_pump], 3.0 * dt)
-                    m_ff = P_tab / (CP * dTs)
-                    # only the reducing side of the correction: a content warmer than the falling
-                    # table temperature is not flushed out (delivered heat stays the measured one)
-                    m_pump = m_ff + min(0.0, C * (Tw - T_tgt) / (CP * dTs * tc))
-                    m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
-        else:
-            mode = 2.0 if H > 0.0 else 3.0
-            span = 1.0 - p[P.m_min]
-            frac = (m - p[P.m_min]) / span if span > 0.0 else 1.0
-            eta_el = p[P.eta_el_min] + (p[P.eta_el_max] - p[P.eta_el_min]) * frac
-            P_el = p[P.m_min] * p[P.P_el_max] + (p[P.P_el_max] - p[P.m_min] * p[P.P_el_max]) * frac
-            P_fuel = P_el / eta_el
-            P_heat = max(0.0, P_fuel * (eta_tot - eta_el) - p[P.P_heatup] * H)
-            if P_heat > 0.0:
-                T_tgt = p[P.T_sup_set]
-                dTs = max(T_tgt - T_in, 1.0)
-                tc = max(p[P.tau_pump], 3.0 * dt)
-                m_pump = P_heat / (CP * dTs) + C * (Tw - T_tgt) / (CP * dTs * tc)
-                m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
-        x[X.run_seconds] += dt
+    ts = tab_start[:, 0]
+    P_el = interp1(tau, ts, tab_start[:, 1]) * p[P.P_el_max]
+    P_fuel = interp1(tau, ts, tab_start[:, 4]) * P_fuel_nom
+    f_q = interp1(tau, ts, tab_start[:, 3])
+    P_tab = max(0.0, f_q * P_fuel_nom * (eta_tot - p[P.eta_el_max]) - p[P.P_heatup] * H)
+    surplus = max(0.0, P_fuel - max(P_el, 0.0) - P_tab)
+    tau0, tau_pos, T_first = _first_heat(tab_start, t_start, p)
+    if tau < tau0:
+        # coolant pre-warming, no flow
+        P_pre = C * (T_first - Tw) / max(tau0 - tau, dt)
+        P_pre = min(surplus, max(0.0, P_pre))
+        P_heat = P_pre
     else:
-        dy = -x[X.y]
-        lim = p[P.slew] * dt
-        x[X.y] += min(lim, max(-lim, dy))
-        tau_off = t - x[X.t_off]
-        if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
-            mode = 4.0
-            tc_ = tab_cool[:, 0]
-            m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X.m_stop]
-            P_el = interp1(tau_off, tc_, tab_cool[:, 3])
-            T_cd = interp1(tau_off, tc_, tab_cool[:, 1])
-            P_heat = m_pump * CP * max(0.0, T_cd - T_in)
-        else:
-            P_el = -p[P.P_idle]
-            mode = 5.0 if on > 0.5 else 0.0
+        T_tgt = T_first if tau + dt < tau_pos else interp1(tau + dt, ts, tab_start[:, 5])
+        T_tgt = max(T_in + 1.0, T_tgt)
+        P_pre = min(surplus, max(0.0, C * (T_tgt - Tw) / dt))
+        P_heat = P_tab + P_pre
+        if P_tab > 0.0:
+            dTs = max(T_tgt - T_in, 1.0)
+            tc = max(p[P.tau_pump], 3.0 * dt)
+            m_ff = P_tab / (CP * dTs)
+            # only the reducing side of the correction: a content warmer than the falling
+            # table temperature is not flushed out (delivered heat stays the measured one)
+            m_pump = m_ff + min(0.0, C * (Tw - T_tgt) / (CP * dTs * tc))
+            m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
+    return m_pump, P_el, P_fuel, P_heat
+
+
+@njit(cache=True, inline="always")
+def _steady(m, dt, p, eta_tot, H, C, Tw, T_in):
+    """Warm-up or steady state at modulation m: returns (mode, m_pump, P_el, P_fuel, P_heat)."""
+    m_pump = 0.0
+    mode = 2.0 if H > 0.0 else 3.0
+    span = 1.0 - p[P.m_min]
+    frac = (m - p[P.m_min]) / span if span > 0.0 else 1.0
+    eta_el = p[P.eta_el_min] + (p[P.eta_el_max] - p[P.eta_el_min]) * frac
+    P_el = p[P.m_min] * p[P.P_el_max] + (p[P.P_el_max] - p[P.m_min] * p[P.P_el_max]) * frac
+    P_fuel = P_el / eta_el
+    P_heat = max(0.0, P_fuel * (eta_tot - eta_el) - p[P.P_heatup] * H)
+    if P_heat > 0.0:
+        T_tgt = p[P.T_sup_set]
+        dTs = max(T_tgt - T_in, 1.0)
+        tc = max(p[P.tau_pump], 3.0 * dt)
+        m_pump = P_heat / (CP * dTs) + C * (Tw - T_tgt) / (CP * dTs * tc)
+        m_pump = min(p[P.m_pump_max], max(0.0, m_pump))
+    return mode, m_pump, P_el, P_fuel, P_heat
+
+
+@njit(cache=True, inline="always")
+def _running(t, dt, x, p, tab_eff, tab_start, y_set, T_in, C, Tw):
+    """A running unit's step: returns (mode, m_pump, P_el, P_fuel, P_heat)."""
+    tau = t - x[X.t_on]
+    t_start = x[X.t_start]
+    target_y = 1.0 if tau < t_start else min(1.0, max(0.0, y_set))
+    dy = target_y - x[X.y]
+    lim = p[P.slew] * dt
+    x[X.y] += min(lim, max(-lim, dy))
+    m = min(1.0, max(p[P.m_min], x[X.y]))
+    H = max(0.0, x[X.f0] - tau / p[P.t_steady])
+    Tk = max(T_in, p[P.T_ret_min]) + 273.15
+    eta_tot = interp2(Tk, m, tab_eff) * p[P.eta_tot_max] / 0.90
+    P_fuel_nom = p[P.P_el_max] / p[P.eta_el_max]
+    if tau < t_start:
+        mode = 1.0
+        m_pump, P_el, P_fuel, P_heat = _start_up(tau, t_start, dt, p, tab_start, eta_tot, H, P_fuel_nom,
+                                                 C, Tw, T_in)
+    else:
+        mode, m_pump, P_el, P_fuel, P_heat = _steady(m, dt, p, eta_tot, H, C, Tw, T_in)
+    x[X.run_seconds] += dt
+    return mode, m_pump, P_el, P_fuel, P_heat
+
+
+@njit(cache=True, inline="always")
+def _stopped(t, dt, x, p, tab_cool, on, T_in):
+    """A stopped unit's step (cool-down after a real start, else idle or locked out): returns
+    (mode, m_pump, P_el, P_fuel, P_heat)."""
+    m_pump = 0.0
+    P_heat = 0.0
+    dy = -x[X.y]
+    lim = p[P.slew] * dt
+    x[X.y] += min(lim, max(-lim, dy))
+    tau_off = t - x[X.t_off]
+    if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
+        mode = 4.0
+        tc_ = tab_cool[:, 0]
+        m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X.m_stop]
+        P_el = interp1(tau_off, tc_, tab_cool[:, 3])
+        T_cd = interp1(tau_off, tc_, tab_cool[:, 1])
+        P_heat = m_pump * CP * max(0.0, T_cd - T_in)
+    else:
+        P_el = -p[P.P_idle]
+        mode = 5.0 if on > 0.5 else 0.0
+    return mode, m_pump, P_el, 0.0, P_heat
+
+
+@njit(cache=True)
+def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
+    """Advance the CHP by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
+    C = CP * RHO * p[P.V_water]
+    Tw = x[X.T_w]
+    on_eff = on > 0.5 and T_in < p[P.T_ret_max]
+    _switch(t, x, p, on_eff)
+    if x[X.running] > 0.5:
+        mode, m_pump, P_el, P_fuel, P_heat = _running(t, dt, x, p, tab_eff, tab_start, y_set, T_in, C, Tw)
+    else:
+        mode, m_pump, P_el, P_fuel, P_heat = _stopped(t, dt, x, p, tab_cool, on, T_in)
     # the internal pump's own flow: what the unit's heat counter multiplies by its delta T
     x[X.m_pump] = m_pump
     m_flow = max(m_pump, m_ext)

@@ -253,6 +253,84 @@ def _remove_inversions(T):
                 T[i] = mean
 
 
+@njit(cache=True, inline="always")
+def _losses_and_ports(T, q_layer, uaN, Tenv, in_layer, in_m, in_T, out_layer, out_m, out_T, Q_loss):
+    """Sources into q_layer [W]: losses and port enthalpy; adds each outflow's layer temperature
+    to out_T. Returns Q_loss plus this substep's loss."""
+    N = T.shape[0]
+    sT = 0.0
+    for k in range(N):
+        sT += T[k]
+        q_layer[k] = -uaN * (T[k] - Tenv)
+    Q_loss += uaN * (sT - N * Tenv)
+    for i in range(in_layer.shape[0]):
+        q_layer[in_layer[i]] += in_m[i] * CP * in_T[i]
+    for j in range(out_layer.shape[0]):
+        Tk = T[out_layer[j]]
+        out_T[j] += Tk
+        q_layer[out_layer[j]] -= out_m[j] * CP * Tk
+    return Q_loss
+
+
+@njit(cache=True, inline="always")
+def _coils(T, q_layer, coil_top, coil_bot, coil_UA, coil_m, coil_Tin, coil_Tout, Q_coil):
+    """Coil heat into q_layer, segment by segment from the inlet layer; adds each coil's outlet
+    temperature to coil_Tout. Returns Q_coil plus this substep's coil heat."""
+    for c in range(coil_top.shape[0]):
+        m = coil_m[c]
+        top = coil_top[c]
+        bot = coil_bot[c]
+        if m > 0.0 and coil_UA[c] > 0.0:
+            nseg = abs(bot - top) + 1
+            eps = 1.0 - math.exp(-coil_UA[c] / nseg / (m * CP))
+            mc = m * CP
+            th = coil_Tin[c]
+            way = 1 if bot >= top else -1  # coil_top is the inlet layer: below the outlet = upward
+            for k in range(top, bot + way, way):
+                dth = eps * (th - T[k])
+                q_layer[k] += mc * dth
+                th -= dth
+            Q_coil += mc * (coil_Tin[c] - th)
+            coil_Tout[c] += th
+        else:
+            coil_Tout[c] += T[bot]
+    return Q_coil
+
+
+@njit(cache=True, inline="always")
+def _interfaces(T, q_layer, ua, kind, hm, in_layer, in_m, out_layer, out_m):
+    """Advective (flux-limited) + conductive enthalpy flow downward across every face, into
+    q_layer."""
+    N = T.shape[0]
+    F = 0.0
+    for k in range(N - 1):
+        for i in range(in_layer.shape[0]):
+            if in_layer[i] == k:
+                F += in_m[i]
+        for j in range(out_layer.shape[0]):
+            if out_layer[j] == k:
+                F -= out_m[j]
+        flux = ua * (T[k] - T[k + 1])
+        if F > 0.0:
+            TU = T[k]
+            d = T[k + 1] - TU
+            Tf = TU
+            if kind != 0 and k >= 1 and d != 0.0:
+                phi = _limiter((TU - T[k - 1]) / d, kind)
+                Tf = TU + 0.5 * phi * (1.0 - F * hm) * d
+            flux += F * CP * Tf
+        elif F < 0.0:
+            TU = T[k + 1]
+            d = T[k] - TU
+            Tf = TU
+            if kind != 0 and k + 2 < N and d != 0.0:
+                phi = _limiter((TU - T[k + 2]) / d, kind)
+                Tf = TU + 0.5 * phi * (1.0 + F * hm) * d
+            flux += F * CP * Tf
+        q_layer[k] -= flux
+        q_layer[k + 1] += flux
+
+
 @njit(cache=True)
 def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
          coil_top, coil_bot, coil_UA, coil_m, coil_Tin, coil_Tout, q_layer):
@@ -269,7 +347,6 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     uaN = p[P.UA_loss] / N
     Tenv = p[P.T_env]
     kind = int(p[P.limiter])
-    nin = in_layer.shape[0]
     nout = out_layer.shape[0]
     ncoil = coil_top.shape[0]
 
@@ -286,66 +363,9 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     Q_coil = 0.0
 
     for _s in range(nsub):
-        # sources into q_layer [W]: losses, port enthalpy, coils; sum of T for the loss total
-        sT = 0.0
-        for k in range(N):
-            sT += T[k]
-            q_layer[k] = -uaN * (T[k] - Tenv)
-        Q_loss += uaN * (sT - N * Tenv)
-        for i in range(nin):
-            q_layer[in_layer[i]] += in_m[i] * CP * in_T[i]
-        for j in range(nout):
-            Tk = T[out_layer[j]]
-            out_T[j] += Tk
-            q_layer[out_layer[j]] -= out_m[j] * CP * Tk
-        for c in range(ncoil):
-            m = coil_m[c]
-            top = coil_top[c]
-            bot = coil_bot[c]
-            if m > 0.0 and coil_UA[c] > 0.0:
-                nseg = abs(bot - top) + 1
-                eps = 1.0 - math.exp(-coil_UA[c] / nseg / (m * CP))
-                mc = m * CP
-                th = coil_Tin[c]
-                way = 1 if bot >= top else -1  # coil_top is the inlet layer: below the outlet = upward
-                for k in range(top, bot + way, way):
-                    dth = eps * (th - T[k])
-                    q_layer[k] += mc * dth
-                    th -= dth
-                Q_coil += mc * (coil_Tin[c] - th)
-                coil_Tout[c] += th
-            else:
-                coil_Tout[c] += T[bot]
-
-        # interfaces: advective (flux-limited) + conductive enthalpy flow downward across face k
-        F = 0.0
-        for k in range(N - 1):
-            for i in range(nin):
-                if in_layer[i] == k:
-                    F += in_m[i]
-            for j in range(nout):
-                if out_layer[j] == k:
-                    F -= out_m[j]
-            flux = ua * (T[k] - T[k + 1])
-            if F > 0.0:
-                TU = T[k]
-                d = T[k + 1] - TU
-                Tf = TU
-                if kind != 0 and k >= 1 and d != 0.0:
-                    phi = _limiter((TU - T[k - 1]) / d, kind)
-                    Tf = TU + 0.5 * phi * (1.0 - F * hm) * d
-                flux += F * CP * Tf
-            elif F < 0.0:
-                TU = T[k + 1]
-                d = T[k] - TU
-                Tf = TU
-                if kind != 0 and k + 2 < N and d != 0.0:
-                    phi = _limiter((TU - T[k + 2]) / d, kind)
-                    Tf = TU + 0.5 * phi * (1.0 + F * hm) * d
-                flux += F * CP * Tf
-            q_layer[k] -= flux
-            q_layer[k + 1] += flux
-
+        Q_loss = _losses_and_ports(T, q_layer, uaN, Tenv, in_layer, in_m, in_T, out_layer, out_m, out_T, Q_loss)
+        Q_coil = _coils(T, q_layer, coil_top, coil_bot, coil_UA, coil_m, coil_Tin, coil_Tout, Q_coil)
+        _interfaces(T, q_layer, ua, kind, hm, in_layer, in_m, out_layer, out_m)
         for k in range(N):
             T[k] += q_layer[k] * hC
         _remove_inversions(T)

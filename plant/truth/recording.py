@@ -149,79 +149,26 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
                    seed: int = 1, magnitude: float | None = None, sample: float = 60.0,
                    jitter: int = 2, command: str | None = None) -> dict:
     """Run the case's plant with the rule-based controller and write a lab-like recording."""
-    if not days > 0:
-        raise ConfigError(f"--days {days}: must be positive")
-    if not sample >= 4 or sample != int(sample):
-        raise ConfigError(f"--sample {sample}: an integer number of seconds >= 4")
-    if not 0 <= jitter < sample / 2:
-        raise ConfigError(f"--jitter {jitter}: 0 … {sample / 2 - 1:g} s")
-    sample = int(sample)
+    sample = _checked_sample(days, sample, jitter)
     out = Path(out)
+    # one generator for jitter, noise and timestamp errors, drawn in this order: a seed gives one
+    # recording
     rng = np.random.default_rng(seed)
     house, params = build_house(case, start, magnitude)
     mag = CASES[case][1] if magnitude is None else float(magnitude)
-    is_truth = case != "nominal"
     n = int(days * 86400 // sample)
     grid = np.arange(1, n + 1) * sample
     offs = rng.integers(-jitter, jitter + 1, size=n) if jitter else np.zeros(n, dtype=int)
     t_sample = grid + offs
     t_sample[-1] = min(t_sample[-1], int(days * 86400))
-    names = house.catalogue.names
-    idx = {nm: i for i, nm in enumerate(names)}
-    cols = [c[1] for c in COLUMNS]
-    rows = np.zeros((n, len(COLUMNS)))
-    truth = {k: np.zeros(n) for k in TRUTH_AUX}
-    wall = _time.perf_counter()
-    t_prev = 0
-    for k in range(n):
-        dt = int(t_sample[k] - t_prev)
-        house.run(float(dt), dt=1.0, out_interval=float(dt))
-        t_prev = t_sample[k]
-        s = house.values()
-        rows[k] = [s[idx[c]] for c in cols]
-        for key in TRUTH_AUX:
-            truth[key][k] = s[idx[key]]
-    wall = _time.perf_counter() - wall
+    rows, truth, wall = _simulate(house, t_sample)
     ledger = house.ledger()
     effect = effect_sizes(truth, sample)
-    if is_truth:
-        # the ideal twin with the same controller, start and duration (what a simulation predicts)
-        from ..house import load_house
-
-        twin = load_house("house1", start=start)
-        twin.run(float(t_sample[-1]), dt=1.0, out_interval=float(t_sample[-1]))
-        Lt = twin.ledger()
-        effect["chp_heat_truth_kWh"] = ledger["heat_chp"] / KWH
-        effect["chp_heat_ideal_twin_closed_loop_kWh"] = Lt["heat_chp"] / KWH
-        effect["chp_heat_error_ideal_twin_vs_truth"] = (Lt["heat_chp"] - ledger["heat_chp"]) / ledger["heat_chp"]
-        effect["boiler_heat_error_ideal_twin_vs_truth"] = (Lt["heat_boiler"] - ledger["heat_boiler"]) / max(
-            ledger["heat_boiler"], 1e-9)
-
-    # measurement model
-    data = {}
-    for j, (col, sig, unit, kind) in enumerate(COLUMNS):
-        v = convert(rows[:, j].copy(), CATALOGUE.signal(sig).unit, unit)
-        if kind in NOISE:
-            sd, q = NOISE[kind]
-            if kind in ("flow", "power"):
-                v = v * (1.0 + rng.normal(0.0, sd, n))
-            else:
-                v = v + rng.normal(0.0, sd, n)
-            v = np.round(v / q) * q
-            v[v == 0] = 0.0  # no "-0.0"
-        data[col] = v
+    if case != "nominal":
+        effect.update(_ideal_twin_errors(start, float(t_sample[-1]), ledger))
+    data = _measure(rows, rng, n)
     t_logged = np.round(t_sample + rng.uniform(-0.5, 0.5, n), 3)
-
-    out.mkdir(parents=True, exist_ok=True)
-    for old in ("recording.csv", "recording.csv.gz"):
-        (out / old).unlink(missing_ok=True)
-    fmts = ["%.3f"] + [FMT[c[3]] for c in COLUMNS]
-    csv_name = write_csv(out / "recording.csv", t_logged, {c[0]: data[c[0]] for c in COLUMNS}, fmts,
-                         gzip_above=GZIP_ABOVE).name
-    write_columns(out / "columns.toml", {c[0]: c[1] for c in COLUMNS}, {c[0]: c[2] for c in COLUMNS},
-                  start=start, file=csv_name,
-                  comment="lab tag -> twin catalogue signal (`twin signals house1`) and the column's unit")
-
+    csv_name = _write_recording(out, t_logged, data, start)
     meta = {
         "case": case, "description": CASES[case][0], "magnitude": mag,
         "magnitude_meaning": CASES[case][2], "seed": seed, "start": start, "days": days,
@@ -246,6 +193,82 @@ def make_recording(case: str, out: str | Path, days: float = 7.0, start: str = "
     }
     (out / "meta.json").write_text(json.dumps(meta, indent=2) + "\n")
     return meta
+
+
+def _checked_sample(days: float, sample: float, jitter: int) -> int:
+    if not days > 0:
+        raise ConfigError(f"--days {days}: must be positive")
+    if not sample >= 4 or sample != int(sample):
+        raise ConfigError(f"--sample {sample}: an integer number of seconds >= 4")
+    if not 0 <= jitter < sample / 2:
+        raise ConfigError(f"--jitter {jitter}: 0 … {sample / 2 - 1:g} s")
+    return int(sample)
+
+
+def _simulate(house, t_sample) -> tuple:
+    """(rows of COLUMNS' true values, TRUTH_AUX series, wall seconds) at the sample times."""
+    n = len(t_sample)
+    idx = {nm: i for i, nm in enumerate(house.catalogue.names)}
+    cols = [c[1] for c in COLUMNS]
+    rows = np.zeros((n, len(COLUMNS)))
+    truth = {k: np.zeros(n) for k in TRUTH_AUX}
+    wall = _time.perf_counter()
+    t_prev = 0
+    for k in range(n):
+        dt = int(t_sample[k] - t_prev)
+        house.run(float(dt), dt=1.0, out_interval=float(dt))
+        t_prev = t_sample[k]
+        s = house.values()
+        rows[k] = [s[idx[c]] for c in cols]
+        for key in TRUTH_AUX:
+            truth[key][k] = s[idx[key]]
+    return rows, truth, _time.perf_counter() - wall
+
+
+def _ideal_twin_errors(start: str, t_end: float, ledger: dict) -> dict:
+    """The ideal twin with the same controller, start and duration (what a simulation predicts):
+    its CHP and boiler heat against the truth's."""
+    from ..house import load_house
+
+    twin = load_house("house1", start=start)
+    twin.run(t_end, dt=1.0, out_interval=t_end)
+    Lt = twin.ledger()
+    return {"chp_heat_truth_kWh": ledger["heat_chp"] / KWH,
+            "chp_heat_ideal_twin_closed_loop_kWh": Lt["heat_chp"] / KWH,
+            "chp_heat_error_ideal_twin_vs_truth": (Lt["heat_chp"] - ledger["heat_chp"]) / ledger["heat_chp"],
+            "boiler_heat_error_ideal_twin_vs_truth": (Lt["heat_boiler"] - ledger["heat_boiler"]) / max(
+                ledger["heat_boiler"], 1e-9)}
+
+
+def _measure(rows: np.ndarray, rng, n: int) -> dict:
+    """The measurement model: each column in its unit, with its noise and quantum."""
+    data = {}
+    for j, (col, sig, unit, kind) in enumerate(COLUMNS):
+        v = convert(rows[:, j].copy(), CATALOGUE.signal(sig).unit, unit)
+        if kind in NOISE:
+            sd, q = NOISE[kind]
+            if kind in ("flow", "power"):
+                v = v * (1.0 + rng.normal(0.0, sd, n))
+            else:
+                v = v + rng.normal(0.0, sd, n)
+            v = np.round(v / q) * q
+            v[v == 0] = 0.0  # no "-0.0"
+        data[col] = v
+    return data
+
+
+def _write_recording(out: Path, t_logged, data: dict, start: str) -> str:
+    """recording.csv (gzipped when large) and columns.toml; returns the csv's file name."""
+    out.mkdir(parents=True, exist_ok=True)
+    for old in ("recording.csv", "recording.csv.gz"):
+        (out / old).unlink(missing_ok=True)
+    fmts = ["%.3f"] + [FMT[c[3]] for c in COLUMNS]
+    csv_name = write_csv(out / "recording.csv", t_logged, {c[0]: data[c[0]] for c in COLUMNS}, fmts,
+                         gzip_above=GZIP_ABOVE).name
+    write_columns(out / "columns.toml", {c[0]: c[1] for c in COLUMNS}, {c[0]: c[2] for c in COLUMNS},
+                  start=start, file=csv_name,
+                  comment="lab tag -> twin catalogue signal (`twin signals house1`) and the column's unit")
+    return csv_name
 
 
 def effect_sizes(truth: dict, sample: float) -> dict:
