@@ -24,7 +24,7 @@ of modulation.
 Additions to the original (documented choices)
 ----------------------------------------------
 * Anti-short-cycling: after a burner stop the burner may not restart before t_anti_cycle (Wolf's
-  "burner anti-cycling time", default 300 s); mode 6 while waiting.  Set 0 for the original.
+  "burner anti-cycling time", default 300 s); mode Mode.ANTI_CYCLE (6) while waiting.  Set 0 for the original.
 * No water content (as upstream): P_heat = m_flow·CP·(T_out − T_in) exactly.  The flow through the
   unit is max(own flow, m_ext); T_out is computed from the energy balance with that flow.  Where a
   table phase would give a spread above 1.5·dT_set with a tiny flow (end of the run-on), the
@@ -58,9 +58,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, indices, pack, param
+from ..component import indices, pack, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
+from .generator import ANTI_CYCLE, IDLE, LOCKED_OUT, RUN_ON, START_UP, STEADY, Generator, Mode, Outlet
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "boiler_wolf_cgb"
 DATA_CGB20 = DATA.parent / "boiler_wolf_cgb20"
@@ -167,19 +168,19 @@ def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext,
     P_heat = 0.0
     P_fuel = 0.0
     P_el = -p[P.P_idle]
-    mode = 0.0
+    mode = IDLE
     if running:
         P_el = 0.0
         P_fuel = P_ss / eta
         tau = t - x[X.t_on]
         if tau < p[P.t_start]:
-            mode = 1.0
+            mode = START_UP
             f = interp1(tau, tab_start[:, 0], tab_start[:, 1])
             fq = interp1(tau, tab_start[:, 0], tab_start[:, 2]) if p[P.use_flow_column] > 0.5 else f
             P_heat = f * P_ss
             m_own = fq * q_ss
         else:
-            mode = 3.0
+            mode = STEADY
             P_heat = P_ss
             m_own = q_ss
         x[X.m_last] = m_own
@@ -187,13 +188,13 @@ def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext,
     else:
         tau_off = t - x[X.t_off]
         if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
-            mode = 4.0
+            mode = RUN_ON
             P_heat = interp1(tau_off, tab_cool[:, 0], tab_cool[:, 1]) * P_ss
             m_own = interp1(tau_off, tab_cool[:, 0], tab_cool[:, 2]) * x[X.m_stop]
         elif waiting:
-            mode = 6.0
+            mode = ANTI_CYCLE
         elif req and x[X.locked] > 0.5:
-            mode = 5.0
+            mode = LOCKED_OUT
     m_flow = max(m_own, m_ext)
     P_heat = min(P_heat, m_flow * CP * SPREAD_CAP * p[P.dT_set])
     T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
@@ -203,21 +204,25 @@ def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext,
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
 
 
-class Kind(ComponentKind):
+class Kind(Generator):
     """The Wolf CGB as a generator on a coupling point (input: the 0-10 V demand U_set)."""
 
     name = "boiler"
     Params = Params
-    role = "generator"
     LINKS = {"data": ("wolf_cgb14", "steady-state data set: wolf_cgb14 (CGB-14 laboratory tables, scaled by "
                                     "P_nom) or wolf_cgb20 (the CGB-20 data sheet, P_nom = 20000)")}
+    NOUN = "boiler"
+    MODES = (Mode.IDLE, Mode.START_UP, Mode.STEADY, Mode.RUN_ON, Mode.LOCKED_OUT, Mode.ANTI_CYCLE, Mode.FAULT)
+    POWER = ("Q_flow", "P_fuel", "P_el")
+    ENERGIES = ("E_heat", "E_fuel")
+    DESCRIPTIONS = {"starts": "number of burner starts", "run_hours": "burner operating hours"}
 
     def initial_state(self, inst):
         return initial_state(inst.params)
 
     def emit_generator(self, c, inst, T_in, m_ext):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))
+        out = Outlet.new(c)
         data = inst.options.get("data", "wolf_cgb14")
         if data not in DATA_SETS:
             c.problems.append(f"{inst.at('data')} = {data!r}: unknown data set; allowed: {', '.join(DATA_SETS)}")
@@ -225,23 +230,6 @@ class Kind(ComponentKind):
         tabs = ", ".join(c.table(a) for a in tables("standard" if data == "wolf_cgb14" else data))
         U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
         mod = c.module(__name__)
-        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Pf}, {Ph}, {mode} = {mod}.step(t, h, {x}, {p}, {tabs}, "
-               f"{U}, {m_ext}, {T_in})")
-        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
-        c.emit("signals",
-               f"{sig('T_sup', 'degC', 'boiler supply temperature')} = {T} if {m} > 0.0 else {T_in}",
-               f"{sig('T_ret', 'degC', 'boiler return temperature')} = {T_in}",
-               f"{sig('m_flow', 'kg/s', 'water flow through the boiler')} = {m}",
-               f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
-               f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
-               f"{sig('P_el', 'W', 'electric power (- consumed)')} = {Pel}",
-               f"{sig('y', '1', 'effective modulation')} = {x}[{X.y}]",
-               f"{sig('mode', '1', '0 idle, 1 start-up, 3 steady, 4 run-on, 5 locked out, 6 anti-cycle wait, 8 fault')} = {mode}",
-               f"{sig('starts', '1', 'number of burner starts')} = {x}[{X.starts}]",
-               f"{sig('run_hours', 'h', 'burner operating hours')} = {x}[{X.run_seconds}] / 3600.0",
-               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
-               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X.E_fuel}]",
-               f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
-               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
-               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
-        return m, T
+        c.emit("hydraulics", f"{out.targets()} = {mod}.step(t, h, {x}, {p}, {tabs}, {U}, {m_ext}, {T_in})")
+        self.emit_outputs(c, inst, x, X, out, T_in)
+        return out.m, out.T

@@ -65,9 +65,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, indices, pack, param
+from ..component import indices, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
+from .generator import IDLE, LOCKED_OUT, RUN_ON, START_UP, STEADY, WARM_UP, Generator, Mode, Outlet
 
 DATA = Path(__file__).resolve().parent.parent / "data" / "chp_neotower2"
 
@@ -203,7 +204,7 @@ def _start_up(tau, t_start, dt, p, tab_start, eta_tot, H, P_fuel_nom, C, Tw, T_i
 def _steady(m, dt, p, eta_tot, H, C, Tw, T_in):
     """Warm-up or steady state at modulation m: returns (mode, m_pump, P_el, P_fuel, P_heat)."""
     m_pump = 0.0
-    mode = 2.0 if H > 0.0 else 3.0
+    mode = WARM_UP if H > 0.0 else STEADY
     span = 1.0 - p[P.m_min]
     frac = (m - p[P.m_min]) / span if span > 0.0 else 1.0
     eta_el = p[P.eta_el_min] + (p[P.eta_el_max] - p[P.eta_el_min]) * frac
@@ -234,7 +235,7 @@ def _running(t, dt, x, p, tab_eff, tab_start, y_set, T_in, C, Tw):
     eta_tot = interp2(Tk, m, tab_eff) * p[P.eta_tot_max] / 0.90
     P_fuel_nom = p[P.P_el_max] / p[P.eta_el_max]
     if tau < t_start:
-        mode = 1.0
+        mode = START_UP
         m_pump, P_el, P_fuel, P_heat = _start_up(tau, t_start, dt, p, tab_start, eta_tot, H, P_fuel_nom,
                                                  C, Tw, T_in)
     else:
@@ -254,7 +255,7 @@ def _stopped(t, dt, x, p, tab_cool, on, T_in):
     x[X.y] += min(lim, max(-lim, dy))
     tau_off = t - x[X.t_off]
     if x[X.starts] > 0.5 and tau_off < p[P.t_stop]:
-        mode = 4.0
+        mode = RUN_ON
         tc_ = tab_cool[:, 0]
         m_pump = interp1(tau_off, tc_, tab_cool[:, 2]) * x[X.m_stop]
         P_el = interp1(tau_off, tc_, tab_cool[:, 3])
@@ -262,7 +263,7 @@ def _stopped(t, dt, x, p, tab_cool, on, T_in):
         P_heat = m_pump * CP * max(0.0, T_cd - T_in)
     else:
         P_el = -p[P.P_idle]
-        mode = 5.0 if on > 0.5 else 0.0
+        mode = LOCKED_OUT if on > 0.5 else IDLE
     return mode, m_pump, P_el, 0.0, P_heat
 
 
@@ -288,12 +289,20 @@ def step(t, dt, x, p, tab_eff, tab_start, tab_cool, on, y_set, m_ext, T_in):
     return m_flow, T_out, P_el, P_fuel, P_heat, mode
 
 
-class Kind(ComponentKind):
+class Kind(Generator):
     """The neoTower 2 as a generator on a coupling point (inputs on, y_set)."""
 
     name = "chp"
     Params = Params
-    role = "generator"
+    NOUN = "CHP"
+    MODES = (Mode.IDLE, Mode.START_UP, Mode.WARM_UP, Mode.STEADY, Mode.RUN_ON, Mode.LOCKED_OUT, Mode.FAULT)
+    MODE_WORDS = {Mode.RUN_ON: "cool-down"}
+    POWER = ("P_el", "Q_flow", "m_flow_pump", "Q_flow_meter", "P_fuel")
+    ENERGIES = ("E_el", "E_heat", "E_fuel")
+    DESCRIPTIONS = {"T_sup": "CHP supply (outlet) temperature", "T_ret": "CHP return (inlet) temperature",
+                    "P_el": "electric power, + produced, - consumed",
+                    "Q_flow": "heat delivered to the circuit m cp (T_sup - T_ret)",
+                    "y": "effective electric modulation", "E_el": "electric energy produced (net)"}
 
     def initial_state(self, inst):
         return initial_state(inst.params)
@@ -301,16 +310,10 @@ class Kind(ComponentKind):
     def stored_energy(self, inst, x):
         return CP * RHO * inst.params.V_water * float(x[X.T_w])
 
-    def _views(self, c, inst):
-        if inst.name not in c.x_slices:
-            c.state(inst, self.initial_state(inst))
-            c.param(inst, pack(inst.params))
-        return f"x_{inst.name}", f"p_{inst.name}"
-
     def emit_pump_request(self, c, inst, T_in):
         """The flow the internal pump asks for this step with no flow forced through the unit
         (a scratch step of a copy of the state): what the unit's own heat counter sees."""
-        x, p = self._views(c, inst)
+        x, p = c.views(inst)
         scratch, m = c.float_array(len(STATES)), c.var("m_pump")
         tabs = ", ".join(c.table(a) for a in tables())
         mod = c.module(__name__)
@@ -320,33 +323,18 @@ class Kind(ComponentKind):
         return m
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
-        x, p = self._views(c, inst)
-        m, T, Pel, Pf, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_fuel", "P_heat", "mode"))
+        x, p = c.views(inst)
+        out = Outlet.new(c)
         tabs = ", ".join(c.table(a) for a in tables())
         on = c.signal(inst, "on", "1", "input", "CHP run command (0/1)")
         y_set = c.signal(inst, "y_set", "1", "input", "CHP electric modulation request 0.55..1 (lower runs at 0.55)")
         mod = c.module(__name__)
-        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Pf}, {Ph}, {mode} = {mod}.step(t, h, {x}, {p}, {tabs}, "
-               f"{on}, {y_set}, {m_ext}, {T_in})")
-        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
-        T_sup = sig("T_sup", "degC", "CHP supply (outlet) temperature")
-        c.emit("signals",
-               f"{T_sup} = {T} if {m} > 0.0 else {x}[{X.T_w}]",
-               f"{sig('T_ret', 'degC', 'CHP return (inlet) temperature')} = {T_in}",
-               f"{sig('m_flow', 'kg/s', 'water flow through the CHP')} = {m}",
-               f"{sig('P_el', 'W', 'electric power, + produced, - consumed')} = {Pel}",
-               f"{sig('Q_flow', 'W', 'heat delivered to the circuit m cp (T_sup - T_ret)')} = {m} * CP * ({T} - {T_in})",
-               f"{sig('m_flow_pump', 'kg/s', 'flow of the CHP internal pump (chp.m_flow is larger when the header forces flow through the unit)')} = {m_pump or x + '[' + str(X.m_pump) + ']'}",
-               f"{sig('Q_flow_meter', 'W', 'the CHP own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it')} = {m_pump or x + '[' + str(X.m_pump) + ']'} * CP * ({T_sup} - {T_in})",
-               f"{sig('P_fuel', 'W', 'fuel power (LHV)')} = {Pf}",
-               f"{sig('y', '1', 'effective electric modulation')} = {x}[{X.y}]",
-               f"{sig('mode', '1', '0 idle, 1 start-up, 2 warm-up, 3 steady, 4 cool-down, 5 locked out, 8 fault')} = {mode}",
-               f"{sig('starts', '1', 'number of starts')} = {x}[{X.starts}]",
-               f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X.run_seconds}] / 3600.0",
-               f"{sig('E_el', 'J', 'electric energy produced (net)')} = {x}[{X.E_el}]",
-               f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
-               f"{sig('E_fuel', 'J', 'fuel energy used')} = {x}[{X.E_fuel}]",
-               f"{c.ledger_entry(inst, 'fuel')} += {Pf} * h",
-               f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
-               f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
-        return m, T
+        c.emit("hydraulics", f"{out.targets()} = {mod}.step(t, h, {x}, {p}, {tabs}, {on}, {y_set}, {m_ext}, {T_in})")
+        # with a pressure-driven header the pump's request is a scratch step's (emit_pump_request)
+        m_own = m_pump or f"{x}[{X.m_pump}]"
+        meter = "the CHP own heat counter: internal-pump flow x (T_sup - T_ret), as the unit reports it"
+        own = {"m_flow_pump": ("kg/s", "flow of the CHP internal pump (chp.m_flow is larger when the header "
+                                       "forces flow through the unit)", m_own),
+               "Q_flow_meter": ("W", meter, f"{m_own} * CP * ({c.s(inst.name + '.T_sup')} - {T_in})")}
+        self.emit_outputs(c, inst, x, X, out, T_in, T_idle=f"{x}[{X.T_w}]", own=own)
+        return out.m, out.T

@@ -47,9 +47,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, indices, pack, param
 from ..tables import interp2, read_tables
 from ..water import CP
+from .generator import DEFROST, IDLE, LOCKED_OUT, START_UP, STEADY, Generator, Mode, Outlet
 
 DATA_AIR = Path(__file__).resolve().parent.parent / "data" / "heat_pump_wolf_cha10"
 DATA_BRINE = Path(__file__).resolve().parent.parent / "data" / "heat_pump_wolf_bws1_10"
@@ -133,7 +134,7 @@ def _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode):
     T_out = T_in + P_heat / (CP * m_flow) if m_flow > 0.0 else T_in
     x[X.E_el] += P_el * dt
     x[X.E_heat] += P_heat * dt
-    x[X.E_src] += (P_heat + P_el) * dt if mode == 3.0 else 0.0
+    x[X.E_src] += (P_heat + P_el) * dt if mode == STEADY else 0.0
     return m_flow, T_out, P_el, P_heat, mode
 
 
@@ -167,17 +168,17 @@ def step_air(t, dt, x, p, el_amb, q_amb, el_mod, q_mod, on, y_set, aux, T_amb, m
     m_own = 0.0
     P_heat = 0.0
     P_el = -p[PA.P_idle]
-    mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
+    mode = LOCKED_OUT if (on > 0.5 or aux > 0.0) else IDLE
     if running:
         x[X.run_seconds] += dt
         if t - x[X.t_on] < p[PA.t_start]:
-            mode = 1.0
+            mode = START_UP
             P_el = 0.0
         elif defrost:
-            mode = 7.0
+            mode = DEFROST
             P_el = 0.0
         else:
-            mode = 3.0
+            mode = STEADY
             m = min(1.0, max(p[PA.m_min], x[X.y]))
             Tk = max(p[PA.T_out_min], T_in + p[PA.dT]) + 273.15
             Ta = T_amb + 273.15
@@ -206,14 +207,14 @@ def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
     m_own = 0.0
     P_heat = 0.0
     P_el = -p[PB.P_idle]
-    mode = 5.0 if (on > 0.5 or aux > 0.0) else 0.0
+    mode = LOCKED_OUT if (on > 0.5 or aux > 0.0) else IDLE
     if running:
         x[X.run_seconds] += dt
         if t - x[X.t_on] < p[PB.t_start]:
-            mode = 1.0
+            mode = START_UP
             P_el = 0.0
         else:
-            mode = 3.0
+            mode = STEADY
             P_aux = _aux_power(aux, p[PB.P_aux_stage])
             Tk = max(p[PB.T_out_min], T_in + p[PB.dT]) + 273.15
             Ts = min(p[PB.T_src_max], T_src) + 273.15
@@ -225,90 +226,80 @@ def step_brine(t, dt, x, p, el_tab, q_tab, on, aux, T_src, m_ext, T_in):
     return _outlet(dt, x, m_own, m_ext, T_in, P_heat, P_el, mode)
 
 
-class AirKind(ComponentKind):
+class _HeatPump(Generator):
+    """What both models share: the signals, and the ledger's fuel as the heat the compressor lifts
+    from the air or the brine."""
+
+    NOUN = "heat pump"
+    MODES = (Mode.IDLE, Mode.START_UP, Mode.STEADY, Mode.LOCKED_OUT, Mode.DEFROST)
+    # the words of the units' operating-state register (devices/heat_pump_wolf_*.toml)
+    MODE_WORDS = {Mode.IDLE: "off", Mode.START_UP: "start delay", Mode.STEADY: "heating", Mode.LOCKED_OUT: "blocked"}
+    POWER = ("Q_flow", "P_el", "COP")
+    ENERGIES = ("E_el", "E_heat")
+    DESCRIPTIONS = {"P_el": "electric power (- consumed: compressor and back-up heater)"}
+
+    def initial_state(self, inst):
+        return initial_state(inst.params)
+
+    def _emit_shared(self, c, inst, x, out, T_in, y, fuel):
+        cop = f"{out.P_heat} / -{out.P_el} if {out.mode} == {STEADY!r} and {out.P_el} < 0.0 else 0.0"
+        self.emit_outputs(c, inst, x, X, out, T_in, y=y, fuel=fuel,
+                          own={"COP": ("1", "heat over electric power while heating (0 otherwise)", cop)})
+
+
+class AirKind(_HeatPump):
     """The CHA-10 as a generator on a coupling point (inputs on, y_set, aux; the outdoor air from
     the weather profile)."""
 
     name = "heat_pump_air"
     Params = ParamsAir
-    role = "generator"
-
-    def initial_state(self, inst):
-        return initial_state(inst.params)
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        m, T, Pel, Ph, mode = (c.var(v) for v in ("m", "T", "P_el", "P_heat", "mode"))
+        out = Outlet.new(c, fuel=False)
         tabs = ", ".join(c.table(a) for a in tables_air())
         on = c.signal(inst, "on", "1", "input", "heat pump run command (0/1)")
         y_set = c.signal(inst, "y_set", "1", "input", "compressor modulation request 0.2..1")
         aux = c.signal(inst, "aux", "1", "input", "back-up heater request: 0, <= 1/3 (2 kW), <= 2/3 (4 kW), > 2/3 (6 kW)")
         mod = c.module(__name__)
-        c.emit("hydraulics", f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_air(t, h, {x}, {p}, {tabs}, "
+        c.emit("hydraulics", f"{out.targets()} = {mod}.step_air(t, h, {x}, {p}, {tabs}, "
                              f"{on}, {y_set}, {aux}, {c.values['weather.T_air']}, {m_ext}, {T_in})")
-        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"{x}[{X.y}]",
-                      f"({Ph} + {Pel}) * h if {mode} == 3.0 else 0.0")
-        return m, T
+        self._emit_shared(c, inst, x, out, T_in, f"{x}[{X.y}]",
+                                    f"({out.P_heat} + {out.P_el}) * h if {out.mode} == {STEADY!r} else 0.0")
+        return out.m, out.T
 
 
-def _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, y, fuel):
-    """The output signals both models share, and their ledger: `fuel` is the energy into the
-    system this step (the heat the compressor lifts from the air or the brine)."""
-    sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
-    c.emit("signals",
-           f"{sig('T_sup', 'degC', 'heat pump supply temperature')} = {T} if {m} > 0.0 else {T_in}",
-           f"{sig('T_ret', 'degC', 'heat pump return temperature')} = {T_in}",
-           f"{sig('m_flow', 'kg/s', 'water flow through the heat pump')} = {m}",
-           f"{sig('Q_flow', 'W', 'heat delivered to the circuit')} = {m} * CP * ({T} - {T_in})",
-           f"{sig('P_el', 'W', 'electric power (- consumed: compressor and back-up heater)')} = {Pel}",
-           f"{sig('COP', '1', 'heat over electric power while heating (0 otherwise)')} = "
-           f"{Ph} / -{Pel} if {mode} == 3.0 and {Pel} < 0.0 else 0.0",
-           f"{sig('y', '1', 'effective modulation')} = {y}",
-           f"{sig('mode', '1', '0 off, 1 start delay, 3 heating, 5 blocked, 7 defrost')} = {mode}",
-           f"{sig('starts', '1', 'number of starts')} = {x}[{X.starts}]",
-           f"{sig('run_hours', 'h', 'operating hours')} = {x}[{X.run_seconds}] / 3600.0",
-           f"{sig('E_el', 'J', 'electric energy (- consumed)')} = {x}[{X.E_el}]",
-           f"{sig('E_heat', 'J', 'heat released into the water')} = {x}[{X.E_heat}]",
-           f"{c.ledger_entry(inst, 'fuel')} += {fuel}",
-           f"{c.ledger_entry(inst, 'el')} += {Pel} * h",
-           f"{c.ledger_entry(inst, 'heat')} += {Ph} * h")
-
-
-class BrineKind(ComponentKind):
+class BrineKind(_HeatPump):
     """The BWS-1-10 as a generator on a coupling point or branch (inputs on, aux; an on/off
     machine, so no modulation request), its brine from a ground collector (link `collector`,
     plant/components/ground_collector.py) that delivers exactly the source heat it takes."""
 
     name = "heat_pump_brine"
     Params = ParamsBrine
-    role = "generator"
     REFS = {"collector": "source"}
     LINKS = {"collector": (REQUIRED, "the ground collector its brine comes from")}
-
-    def initial_state(self, inst):
-        return initial_state(inst.params)
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         coll = c.instances[inst.options["collector"]]
         coll_kind = c.kinds[coll.kind]
         T_src = coll_kind.source_temperature(c, coll)
-        m, T, Pel, Ph, mode, Q_src = (c.var(v) for v in ("m", "T", "P_el", "P_heat", "mode", "Q_src"))
+        out, Q_src = Outlet.new(c, fuel=False), c.var("Q_src")
         tabs = ", ".join(c.table(a) for a in tables_brine())
         on = c.signal(inst, "on", "1", "input", "heat pump run command (0/1)")
         aux = c.signal(inst, "aux", "1", "input", "back-up heater request: 0, <= 1/3 (2 kW), <= 2/3 (4 kW), > 2/3 (6 kW)")
         mod = c.module(__name__)
         c.emit("hydraulics",
-               f"{m}, {T}, {Pel}, {Ph}, {mode} = {mod}.step_brine(t, h, {x}, {p}, {tabs}, {on}, {aux}, "
+               f"{out.targets()} = {mod}.step_brine(t, h, {x}, {p}, {tabs}, {on}, {aux}, "
                f"{T_src}, {m_ext}, {T_in})",
-               f"{Q_src} = {Ph} + {Pel} if {mode} == 3.0 else 0.0")
+               f"{Q_src} = {out.P_heat} + {out.P_el} if {out.mode} == {STEADY!r} else 0.0")
         coll_kind.attach(c, coll, inst, Q_src, f"{x}[{X.running}]")
-        _emit_signals(c, inst, x, m, T, Pel, Ph, mode, T_in, f"1.0 if {mode} == 3.0 else 0.0", f"{Q_src} * h")
+        self._emit_shared(c, inst, x, out, T_in, f"1.0 if {out.mode} == {STEADY!r} else 0.0",
+                                    f"{Q_src} * h")
         T_brine_in, T_brine_out = coll_kind.brine_temperatures(c, coll)
-        sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
-        c.emit("signals",
-               f"{sig('T_brine_in', 'degC', 'brine entering the heat pump (from the collector)')} = {T_brine_in}",
-               f"{sig('T_brine_out', 'degC', 'brine leaving the heat pump (to the collector)')} = {T_brine_out}",
-               f"{sig('Q_flow_source', 'W', 'heat taken from the brine (compressor heat - compressor power)')} = {Q_src}",
-               f"{sig('E_source', 'J', 'heat taken from the brine since the start')} = {x}[{X.E_src}]")
-        return m, T
+        self.emit_own(c, inst,
+                      ("T_brine_in", "degC", "brine entering the heat pump (from the collector)", T_brine_in),
+                      ("T_brine_out", "degC", "brine leaving the heat pump (to the collector)", T_brine_out),
+                      ("Q_flow_source", "W", "heat taken from the brine (compressor heat - compressor power)", Q_src),
+                      ("E_source", "J", "heat taken from the brine since the start", f"{x}[{X.E_src}]"))
+        return out.m, out.T
