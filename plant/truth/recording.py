@@ -50,6 +50,7 @@ from profiles.columns import write_columns
 from profiles.recording import write_csv
 
 from ..catalogue import CATALOGUE
+from ..components.generator import Mode
 from ..errors import ConfigError
 from ..units import UNITS, convert
 
@@ -276,8 +277,9 @@ def effect_sizes(truth: dict, sample: float) -> dict:
     heating flow, CHP flow while CHP and boiler run over its ideal flow (1 = no suction), CHP
     heat true vs metered."""
     mode = truth["chp.mode"]
-    on = (mode >= 0.5) & (mode <= 3.5)
-    idle = (mode < 0.5) | (mode > 4.5)
+    # the codes are whole numbers in a float signal: compared half a code either side
+    on = (mode >= Mode.START_UP - 0.5) & (mode <= Mode.STEADY + 0.5)
+    idle = (mode < Mode.IDLE + 0.5) | (mode > Mode.RUN_ON + 0.5)
     heat = idle & (truth["mixer.m_flow_primary"] > 0.02) & (truth["boiler.m_flow"] <= 0.0)
     both = on & (truth["boiler.m_flow"] > 0.01)
     e = {}
@@ -295,8 +297,8 @@ def effect_sizes(truth: dict, sample: float) -> dict:
         e["suction_chp_flow_over_ideal_flow"] = float(truth["chp.m_flow"][both].sum() / max(ideal.sum(), 1e-12))
         e["samples_chp_and_boiler_running"] = int(both.sum())
     if on.any():
-        e["chp_outlet_mean_degC_steady_running"] = float(truth["chp.T_sup"][on & (mode > 2.5)].mean()) \
-            if (on & (mode > 2.5)).any() else float("nan")
+        e["chp_outlet_mean_degC_steady_running"] = float(truth["chp.T_sup"][on & (mode > Mode.WARM_UP + 0.5)].mean()) \
+            if (on & (mode > Mode.WARM_UP + 0.5)).any() else float("nan")
         e["chp_own_pump_share_of_chp_flow_running"] = float(
             truth["chp.m_flow_pump"][on].sum() / max(truth["chp.m_flow"][on].sum(), 1e-12))
     e["chp_heat_kWh_samples"] = float(truth["chp.Q_flow"].sum() * sample / KWH)

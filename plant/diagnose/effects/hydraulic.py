@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ...catalogue import CATALOGUE
+from ...components.generator import Mode
 from .base import Effect, Param, register
 
 
@@ -58,7 +59,8 @@ class IdleGeneratorFlow(Effect):
             return None, None, None
         n = len(sim)
         mode = sim[:, CATALOGUE.index("chp.mode")]
-        sel = (self._idle_mask(ctx)[:n] & ((mode < 0.5) | (mode > 4.5)) & (sim[:, CATALOGUE.index("boiler.m_flow")] <= 0.0)
+        sel = (self._idle_mask(ctx)[:n] & ((mode < Mode.IDLE + 0.5) | (mode > Mode.RUN_ON + 0.5))
+               & (sim[:, CATALOGUE.index("boiler.m_flow")] <= 0.0)
                & (sim[:, CATALOGUE.index("mixer.m_flow_primary")] > 0.02))
         if sel.sum() < 10:
             return None, None, None
