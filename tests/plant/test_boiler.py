@@ -4,6 +4,7 @@ import pytest
 
 from plant.component import pack
 from plant.components import boiler
+from plant.components.generator import Mode
 from plant.tables import interp2
 from plant.water import CP
 
@@ -41,7 +42,7 @@ def test_steady_state_worked_numbers(T_in, U, kW, spread, eta, l_min):
     P, p, x = make()
     _, r = run(x, p, 0.0, 400, T_in=T_in, U=U)
     m, T_out, P_el, P_fuel, P_heat, mode = r
-    assert mode == 3.0 and P_el == 0.0
+    assert mode == Mode.STEADY and P_el == 0.0
     assert P_heat / 1000 == pytest.approx(kW, rel=0.01)
     assert T_out - T_in == pytest.approx(spread, rel=0.01)
     assert P_heat / P_fuel == pytest.approx(eta, rel=0.01)
@@ -92,7 +93,7 @@ def test_run_on_after_stop():
         m, T_out, P_el, P_fuel, P_heat, mode = boiler.step(t, 1.0, x, p, *TABS, 0.0, 0.0, 40.0)
         tau = t - t_off
         if tau < 70:
-            assert mode == 4.0 and P_fuel == 0.0 and P_el == -35.0
+            assert mode == Mode.RUN_ON and P_fuel == 0.0 and P_el == -35.0
             assert m == pytest.approx(np.interp(tau, COOL[:, 0], COOL[:, 2]) * m_stop, rel=1e-9)
             mod = max(0.2, x[boiler.X.y])
             expected = np.interp(tau, COOL[:, 0], COOL[:, 1]) * steady(40.0, mod)[0]
@@ -100,7 +101,7 @@ def test_run_on_after_stop():
             if tau in (1, 10, 40):
                 assert P_heat == pytest.approx(expected, rel=1e-9)
         else:
-            assert mode == 0.0 and m == 0.0 and P_heat == 0.0
+            assert mode == Mode.IDLE and m == 0.0 and P_heat == 0.0
         t += 1.0
 
 
@@ -137,7 +138,7 @@ def test_heat_equals_enthalpy_flux(dt):
         T_in = 40.0 + 30.0 * (t / 14400.0)
         m, T_out, P_el, P_fuel, P_heat, mode = boiler.step(t, dt, x, p, *TABS, U, m_ext, T_in)
         assert P_heat == pytest.approx(m * CP * (T_out - T_in), rel=1e-12, abs=1e-9)
-        if mode == 3.0:
+        if mode == Mode.STEADY:
             assert P_fuel - P_heat - P_el > -0.06 * P_fuel  # eta <= 1.05 on LHV basis
         E += P_heat * dt
         t += dt

@@ -4,6 +4,7 @@ import pytest
 
 from plant.component import build_params, pack
 from plant.components import chp
+from plant.components.generator import Mode
 from plant.errors import ConfigError
 from plant.water import CP, RHO
 
@@ -73,7 +74,7 @@ def test_steady_state_matches_efficiency_table(T_in, y, heat, flow_l_min):
     P, p, x = make()
     _, r = run(x, p, 0.0, 3000, 1.0, y=y, T_in=T_in)
     m_flow, T_out, P_el, P_fuel, P_heat, mode = r
-    assert mode == 3.0
+    assert mode == Mode.STEADY
     eta_el = 0.18 + 0.06 * (y - 0.55) / 0.45
     eta_tot = np.interp(T_in + 273.15, EFF[1:, 0], EFF[1:, 1 if y == 0.55 else 2])
     assert P_el == pytest.approx(1900.0 * y, rel=1e-9)
@@ -131,7 +132,7 @@ def test_energy_closes_over_starts_and_stops(dt):
         E_out += m * CP * (T_out - T_in) * dt
         E_fuel += P_fuel * dt
         E_el += P_el * dt
-        if mode == 3.0:
+        if mode == Mode.STEADY:
             assert P_fuel - P_el - P_heat >= 0.0
         t += dt
     assert x[chp.X.starts] == 4

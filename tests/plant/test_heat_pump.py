@@ -4,6 +4,7 @@ import pytest
 
 from plant.component import pack
 from plant.components import heat_pump as hp
+from plant.components.generator import Mode
 from plant.tables import interp2
 from plant.water import CP
 
@@ -31,7 +32,7 @@ def run_air(n, y=1.0, aux=0.0, T_amb=2.0, T_in=30.0, on=1.0, x=None, t0=0.0, dt=
 def test_air_worked_numbers_w35(T_amb, y, kW, cop):
     x, r = run_air(200, y=y, T_amb=T_amb, T_in=30.0)
     m, T_out, P_el, P_heat, mode = r
-    assert mode == 3.0
+    assert mode == Mode.STEADY
     assert P_heat / 1000 == pytest.approx(kW, rel=0.01)
     assert P_heat / -P_el == pytest.approx(cop, rel=0.01)
     assert T_out == pytest.approx(35.0, abs=1e-9) and m == pytest.approx(P_heat / (CP * 5.0))
@@ -98,7 +99,7 @@ def run_brine(n, T_src=0.0, T_in=30.0, on=1.0, aux=0.0, record=False):
 def test_brine_worked_numbers(T_src, T_in, kW, cop):
     x, r = run_brine(400, T_src=T_src, T_in=T_in)
     m, T_out, P_el, P_heat, mode = r
-    assert mode == 3.0
+    assert mode == Mode.STEADY
     assert P_heat / 1000 == pytest.approx(kW, rel=0.01)
     assert P_heat / -P_el == pytest.approx(cop, rel=0.01)
     assert T_out == pytest.approx(T_in + 5.0)
@@ -194,7 +195,7 @@ def test_brine_house_cop_is_the_tables(ground_source_week):
     L = house.ledger()
     seasonal = L["heat_heat_pump"] / -L["el_heat_pump"]
     assert 3.5 < seasonal < 5.5
-    heating = s["heat_pump.mode"] == 3.0
+    heating = s["heat_pump.mode"] == Mode.STEADY
     assert heating.sum() > 100
     el, q = tables_brine_points(s["heat_pump.T_ret"][heating] + 5.0, s["heat_pump.T_brine_in"][heating])
     cop = s["heat_pump.COP"][heating]
@@ -221,7 +222,7 @@ def test_brine_temperatures_within_physical_limits(ground_source_week):
     assert np.all(T_out <= T_in + 1e-12) and np.all(T_in <= T_g + 1e-12)  # the brine is colder than the soil
     assert np.all(T_g <= T_ground0)  # which started undisturbed and only gave heat away in January
     assert T_out.min() > -10.0  # far from a glycol brine's freezing point (about -15 degC)
-    heating = s["heat_pump.mode"] == 3.0
+    heating = s["heat_pump.mode"] == Mode.STEADY
     assert np.all(T_in[heating] > -5.0)  # the unit heats only above its brine limit
     spread = (T_in - T_out)[heating]
     m_cp = house.decl.instances["ground"].params.m_flow * CP

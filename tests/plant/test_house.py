@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from plant.components.generator import Mode
 from plant.errors import ConfigError, SignalError
 from plant.declaration import HOUSES
 from plant.house import load_house
@@ -78,7 +79,7 @@ def test_remote_input_overrides_built_in_control_until_released():
     T0 = house.get("storage.T_top")
     for _ in range(60):
         house.step(60)
-    assert house.get("boiler.mode") == 3 and house.get("boiler.Q_flow") > 5000
+    assert house.get("boiler.mode") == Mode.STEADY and house.get("boiler.Q_flow") > 5000
     assert house.get("boiler.U_set") == 10.0
     house.release("boiler.U_set")  # the rule-based controller takes over again
     house.step(5)

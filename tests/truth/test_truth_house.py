@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from plant.components.generator import Mode
 from plant.house import load_house
 from plant.truth import load_truth
 
@@ -26,7 +27,7 @@ def test_idle_chp_sees_flow_and_its_outlet_cools(truth):
     _drive(truth, 0.0, 0.0)
     truth.run(1800.0, dt=1.0, out_interval=1800.0)
     m = truth.get("chp.m_flow")
-    assert truth.get("chp.mode") == 0.0 and truth.get("chp.m_flow_pump") == 0.0
+    assert truth.get("chp.mode") == Mode.IDLE and truth.get("chp.m_flow_pump") == 0.0
     assert 0.02 < m < 0.15
     assert 0.15 < m / truth.get("mixer.m_flow_primary") < 0.4
     assert truth.get("chp.T_sup") < T_hot - 15.0
@@ -39,7 +40,7 @@ def test_running_boiler_does_not_force_flow_through_the_running_chp(truth):
     truth.reset()
     _drive(truth, 1.0, 10.0, m_heat=0.2)
     truth.run(3600.0, dt=1.0, out_interval=3600.0)
-    assert truth.get("boiler.m_flow") > 0.1 and truth.get("chp.mode") == 3.0
+    assert truth.get("boiler.m_flow") > 0.1 and truth.get("chp.mode") == Mode.STEADY
     assert truth.get("switch.p_supply") > 0.0 and truth.get("switch.m_flow_forced") == 0.0
     assert truth.get("chp.m_flow") == truth.get("chp.m_flow_pump") > 0.0
     assert truth.get("chp.T_sup") > 79.0

@@ -10,6 +10,7 @@ import pytest
 
 from plant.component import pack
 from plant.components import boiler
+from plant.components.generator import Mode
 
 TABLE = Path(__file__).resolve().parents[2] / "plant" / "data" / "boiler_wolf_cgb20" / "Wolf_CBG_20.txt"
 TOL = 0.01
@@ -43,7 +44,7 @@ def _steady(T_ret, U):
         r = boiler.step(t, 1.0, x, p, *tabs, U, 0.0, T_ret)
         t += 1.0
     m, T_out, P_el, P_fuel, P_heat, mode = r
-    assert mode == 3.0
+    assert mode == Mode.STEADY
     return P_heat, P_fuel
 
 
