@@ -311,6 +311,11 @@ def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set
     if se is None:
         se = _stderr(f, p, v, f(v), ctx.n_eff(ctx.train))
     judged_on = _judged_on(ctx, j, y_before, sim, alone) if local else None
+    if best.tank is not None:
+        # relative to its neighbours a storage sensor's residual is its own: the effect's shape
+        # there in every operating state (Effect.unlike)
+        e = ctx.meas[m, j] - y_before[m]
+        judged_on["unlike"] = effect.unlike([v], e, {k: f[:len(m)][m] for k, f in ctx.flags.items()})
     return Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
                   train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                   evaluations=nfev, sim=sim, effect=effect, local=judged_on)

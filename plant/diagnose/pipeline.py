@@ -186,8 +186,10 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
                                   "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in b.nominal.pipe.items()}
     rep["unit_modes"] = unit_modes.public(b.modes)
+    # in the catalogue's order: the fit keeps them in a set's, which differs between runs
     rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]])
-                                    for sig, h in b.nominal.heights.items()}
+                                    for sig, h in sorted(b.nominal.heights.items(),
+                                                         key=lambda kv: CATALOGUE.index(kv[0]))}
     report_mod.flag_bounds(rep, list(s.results))
     return rep
 

@@ -125,6 +125,8 @@ def _judged_local(r, n_eff):
     if d["heldout_rms_before"] <= d["limit"]:
         reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
                   "no sensor-own mismatch; rejected")
+    elif d.get("unlike"):
+        reason = f"{what}: {d['unlike']}; rejected"
     elif d["gain"] < LOCAL_GAIN:
         reason = f"{what}: removes {d['gain'] * 100:.0f} % < {LOCAL_GAIN * 100:.0f} % of its residual; rejected"
     elif r.bic >= b0:

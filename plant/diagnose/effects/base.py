@@ -65,6 +65,12 @@ class Effect:
         after it (None: from the cost's curvature)."""
         return None
 
+    def unlike(self, theta, e: np.ndarray, states: dict) -> str:
+        """kind "signal": '' when the residual e the candidate was fitted to (measured - simulated,
+        training samples) has the shape the effect gives in every operating state of states
+        ({name: mask over e}); else why not, in words. Default: any shape."""
+        return ""
+
     def fitted(self, ctx) -> list[int]:
         """Indices of the parameters the recording can identify (the others stay at their
         nominal value); default: all. Counted as the candidate's k in the BIC."""

@@ -49,6 +49,18 @@ class SensorLag(Effect):
         return f"sensor time constant {theta[0]:.0f} s"
 
 
+# An offset is the same whatever the plant does: in every operating state covering at least
+# STATE_SHARE of the training samples, the residual the offset was fitted to keeps at least
+# CONSTANT_SHARE of it, with its sign. A tank that stratifies differently around a sensor (a
+# port plume: rigsim realisation 2's plume_120, storage.T_sensor_2 fitted as a -1.31 K offset)
+# differs in some states only: with the boiler on 0.01 of the "offset" was left there, with the
+# DHW charge on -0.01. Chosen on that case and on rigsim realisation 1's sensor_offset_p1_5 (a
+# true +1.5 K offset on BT_T05: in every state 0.93 ... 1.47 of the fitted one), reported on the
+# other offset cases of both simulators and the concealed suite.
+STATE_SHARE = 0.05
+CONSTANT_SHARE = 0.5
+
+
 @register
 class SensorOffset(Effect):
     id = "sensor_offset"
@@ -76,6 +88,19 @@ class SensorOffset(Effect):
 
     def stderr(self, e, n_eff):
         return float(np.std(e) / math.sqrt(n_eff))
+
+    def unlike(self, theta, e, states):
+        v = float(theta[0])
+        ok = np.isfinite(e)
+        for name, m in states.items():
+            m = m & ok
+            if m.sum() < STATE_SHARE * ok.sum() or v == 0.0:
+                continue
+            share = float(np.mean(e[m])) / v + 0.0  # + 0.0: no "-0.00" in the reason
+            if share < CONSTANT_SHARE:
+                return (f"not constant: with {name.replace('_', ' ')} the residual keeps {share:.2f} of "
+                        f"the {v:+.2f} K offset (< {CONSTANT_SHARE:g})")
+        return ""
 
     def summary(self, theta, ctx, sim=None):
         return f"sensor offset {theta[0]:+.2f} K"

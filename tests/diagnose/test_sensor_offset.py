@@ -1,0 +1,62 @@
+"""A sensor offset is the same in every operating state (effects/sensor.py SensorOffset.unlike):
+a tank that stratifies differently around a sensor in some states only is not an offset."""
+import numpy as np
+import pytest
+
+from plant.diagnose import fit, synth, verdict
+from plant.diagnose.context import Context
+from plant.diagnose.effects import catalogue
+from plant.diagnose.effects.sensor import CONSTANT_SHARE, STATE_SHARE
+
+OFFSET = next(e for e in catalogue() if e.id == "sensor_offset")
+
+
+def _states(n, on_share):
+    on = np.zeros(n, dtype=bool)
+    on[: int(on_share * n)] = True
+    return {"boiler_on": on, "chp_on": np.ones(n, dtype=bool)}
+
+
+def test_a_constant_offset_with_noise_is_alike_in_every_state():
+    rng = np.random.default_rng(3)
+    e = 1.5 + 0.5 * rng.standard_normal(2000)
+    assert OFFSET.unlike([float(np.mean(e))], e, _states(2000, 0.2)) == ""
+
+
+def test_a_residual_missing_in_one_state_is_not_an_offset():
+    n = 2000
+    st = _states(n, 0.2)
+    e = np.where(st["boiler_on"], 0.0, -1.6)   # the "offset" vanishes while the boiler runs
+    why = OFFSET.unlike([float(np.mean(e))], e, st)
+    assert why.startswith("not constant: with boiler on the residual keeps 0.00 of the -1.28 K offset")
+    # an opposite sign in a state is no offset either
+    e2 = np.where(st["boiler_on"], 0.5, -1.6)
+    assert "boiler on" in OFFSET.unlike([float(np.mean(e2))], e2, st)
+    # at half the offset it still is one (CONSTANT_SHARE), and a state under STATE_SHARE is not judged
+    e3 = np.where(st["boiler_on"], -0.9, -1.6)
+    assert CONSTANT_SHARE <= 0.9 / np.mean(-e3) and OFFSET.unlike([float(np.mean(e3))], e3, st) == ""
+    rare = _states(n, 0.5 * STATE_SHARE)
+    e4 = np.where(rare["boiler_on"], 0.0, -1.6)
+    assert OFFSET.unlike([float(np.mean(e4))], e4, rare) == ""
+
+
+def test_an_offset_that_is_not_constant_is_rejected_with_that_reason():
+    """fit_signal records the shape check on a storage sensor (Result.local['unlike']), and the
+    verdict rejects the candidate with it though it removes most of the sensor's own residual."""
+    rec = synth.make("none", days=1.0, noise=False)
+    ctx = Context.build(rec, train_days=0.5)
+    sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0)
+    j = ctx.measured.index("storage.T_sensor_5")
+    state = ctx.flags["heating_on"]
+    assert STATE_SHARE < state[ctx.train].mean() < 1.0 - STATE_SHARE
+    sim[:, j] -= np.where(state, 0.0, 2.0)      # reads 2 K high only while the heating is off
+    r = fit.fit_signal(OFFSET, ctx, sim)
+    assert r.signal == "storage.T_sensor_5"
+    assert r.local["unlike"].startswith("not constant: with ")  # the first state where it is not
+    judged = verdict._judged_local(r, n_eff=100.0)
+    assert not judged.accepted and "not constant" in judged.reason
+    # the same sensor reading 2 K high throughout is an offset, and named
+    sim[:, j] = np.where(np.isfinite(ctx.meas[:, j]), ctx.meas[:, j], 0.0) - 2.0
+    r = fit.fit_signal(OFFSET, ctx, sim)
+    assert r.local["unlike"] == "" and r.theta[0] == pytest.approx(2.0, abs=1e-6)
+    assert verdict._judged_local(r, n_eff=100.0).accepted
