@@ -1,52 +1,146 @@
-"""PHIL loop: exchange latency and step lateness in real time with 1 and 5 houses, and the SF1
-closed loop over one type day against the bench emulators (docs/phil.md).
+"""PHIL loop: exchange latency and step lateness in real time with 1 and 5 houses, the SF1 closed
+loop over one type day against the bench emulators, and SF3's brine and a district house's grid
+closed loops (docs/phil.md).
 
 Every bench is a `twin bench` process on loopback, every house a `twin phil` process (the twin as
-Modbus TCP master of its benches), as in a lab.
-  1. Real time, 1 s steps, 2 minutes: house 1 with its three benches (space heating, tap water,
-     solar), then 5 houses at once (15 bench processes): exchange latency set-point-out to
-     measurement-in per bench (one FC16 write + one FC4 read; median, p99), step lateness of the
-     twin's clock (median, p99), and the twin's share of the 1 s cycle (exchanges + house step).
+Modbus TCP master of its benches), as in a lab: forked from this one once it has imported the
+twin and compiled the houses (Twin, preload()), so that their start-up is not counted in the
+10 minutes.
+  1. Real time, 1 s steps, 2 minutes (type day 1 from midnight: no unpaced pre-run, every step
+     exchanges with every bench whatever the house does): house 1 with its three benches
+     (space heating, tap water, solar), then 5 houses at once (15 bench processes): exchange
+     latency set-point-out to measurement-in per bench (one FC16 write + one FC4 read; median,
+     p99), step lateness of the twin's clock (median, p99), and the twin's share of the 1 s
+     cycle (exchanges + house step).
      Comparison measured in the same run: the same exchange in a tight loop of a bare client
      (phil/master.py's BenchLink, no twin around it) against a bench process.
   2. SF1 closed loop, type day 1 (January; its middle day, 0-24 h) at --speed real time with
      --step s steps: heat of each bench's meter against the simulated side's (the reference's
      0.1 % for the space heating), return-temperature RMS follow error. Comparison: the space
      heating of the same house simulated alone on the same day with an ideal bench.
+  3. SF3's brine and a district house's grid, both at once (each bench a process, each house a
+     process): house 3 against the heat-pump source emulator, house 1 at node sf1 of the coses
+     grid against the grid emulator, type day 1 (January) from midnight, 300 s warm-up, then
+     --boundary-hours counted at --boundary-speed with 2 s steps (the benches' default duty
+     cycles: the lab's heat pump 20 min on / 10 off, the substation extracting 20 / 10 min).
+     Heat of the bench's meter against the simulated side's over the same span (the bench's heat
+     scaled to the twin's span by the PLC's clock: phil/report.py).
 Goals (issue #25): lateness p99 < 10 ms, exchange < 5 ms on loopback. Whole run < 10 min.
-Ends with RESULT phil_heat_error_pct=, phil_exchange_p99_ms=, phil_lateness_p99_ms=.
+Ends with RESULT phil_heat_error_pct=, phil_exchange_p99_ms=, phil_lateness_p99_ms=,
+phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (the last two over the same span).
 Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--speed 330] [--step 3]
+     [--boundary-hours 0.5] [--boundary-speed 200]
+The machine's load average at the start and the end is printed with the wall times.
 """
 from __future__ import annotations
 
 import argparse
 import csv
+import gc
+import importlib
 import json
+import multiprocessing
+import os
 import re
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
 BENCHES = ("space_heating", "tap_water", "solar")
 
 
-def start_bench(name: str, speed: float) -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "bench", name, "--modbus-tcp",
-                             "127.0.0.1:0", "--speed", str(speed)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+FORK = multiprocessing.get_context("fork")
+
+
+def preload() -> None:
+    """What every bench and twin process imports and compiles, done once here: the processes are
+    forked from this one (Twin), so twenty of them start in seconds instead of each importing
+    numba, pymodbus and the twin (2-3 s of CPU each on this machine, 43 s for 15 bench processes
+    at load 8) and loading its house (a full numba compile, 100 s under load, whenever plant/
+    changed since the last run: plant/__init__.py's cache key)."""
+    from cli.main import build_parser
+    from plant.house import load_house
+
+    build_parser()                  # imports every subcommand's module
+    for module in ("phil.emulator.server", "phil.loop"):    # the benches' models and server, the loop
+        importlib.import_module(module)
+    for house in ("house1_phil", "house3_phil"):
+        load_house(house, controller="rule_based", overrides={"profiles.typeday": 1})
+    gc.freeze()     # as twin phil and twin bench do once loaded (cli/phil.py): never collected
+
+
+def _twin_main(argv: list[str], out: int) -> None:
+    os.dup2(out, 1)
+    os.dup2(out, 2)
+    sys.stdout = open(1, "w", buffering=1, closefd=False)
+    sys.stderr = sys.stdout
+    from cli.main import main
+
+    code = main(argv)
+    sys.stdout.flush()
+    os._exit(code)
+
+
+class Twin:
+    """`twin ARGV` (cli.main) as its own process, forked from this one after preload(): the same
+    code as `python -m cli.main ARGV`, its output (stdout and stderr) read here. The subset of
+    subprocess.Popen the benchmark uses."""
+
+    def __init__(self, argv: list[str]) -> None:
+        sys.stdout.flush()
+        read, write = os.pipe()
+        self.process = FORK.Process(target=_twin_main, args=(argv, write))
+        self.process.start()
+        os.close(write)
+        self.stdout = os.fdopen(read, "r")
+        self.rest: list[str] = []
+        self.reader: threading.Thread | None = None
+
+    def poll(self) -> int | None:
+        return self.process.exitcode
+
+    def send_signal(self, sig: int) -> None:
+        if self.process.exitcode is None:
+            os.kill(self.process.pid, sig)
+
+    def kill(self) -> None:
+        self.send_signal(signal.SIGKILL)
+
+    def communicate(self, timeout: float) -> tuple[str, None]:
+        """Wait for the end (raises subprocess.TimeoutExpired) and return what it printed since."""
+        if self.reader is None:
+            self.reader = threading.Thread(target=lambda: self.rest.extend(self.stdout), daemon=True)
+            self.reader.start()
+        self.process.join(timeout)
+        if self.process.exitcode is None:
+            raise subprocess.TimeoutExpired(str(self.process.pid), timeout)
+        self.reader.join(5.0)
+        return "".join(self.rest), None
+
+
+def start_bench(name: str, speed: float, *params: str) -> tuple[Twin, int]:
+    return port_of(launch_bench(name, speed, *params))
+
+
+def launch_bench(name: str, speed: float, *params: str) -> Twin:
+    return Twin(["bench", name, "--modbus-tcp", "127.0.0.1:0", "--speed", str(speed), *params])
+
+
+def port_of(proc: Twin) -> tuple[Twin, int]:
+    """The bench process and the port it printed once it serves."""
     port = re.search(r":(\d+)", proc.stdout.readline())
     return proc, int(port.group(1))
 
 
-def stop(procs: list[subprocess.Popen]) -> None:
+def stop(procs: list[Twin]) -> None:
     for p in procs:
-        if p.poll() is None:
-            p.send_signal(signal.SIGTERM)
+        p.send_signal(signal.SIGTERM)
     for p in procs:
         try:
             p.communicate(timeout=30)
@@ -54,11 +148,9 @@ def stop(procs: list[subprocess.Popen]) -> None:
             p.kill()
 
 
-def start_house(ports: dict[str, int], run: Path, *options: str) -> subprocess.Popen:
+def start_house(ports: dict[str, int], run: Path, *options: str, house: str = "house1") -> Twin:
     benches = [f"--bench={n}=127.0.0.1:{port}" for n, port in ports.items()]
-    return subprocess.Popen([sys.executable, "-m", "cli.main", "phil", "house1", *benches,
-                             "--record", str(run), *options], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    return Twin(["phil", house, *benches, "--record", str(run), *options])
 
 
 def counted_rows(run: Path, warmup_steps: int) -> list[dict[str, str]]:
@@ -82,15 +174,17 @@ def bare_exchange(port: int, n: int = 300) -> np.ndarray:
 
 def realtime(houses: int, seconds: float, tmp: Path) -> dict:
     """`houses` houses at once, each with its three benches, 1 s steps in real time."""
-    benches = [{n: start_bench(n, 1.0) for n in BENCHES} for _ in range(houses)]
+    # all bench processes start at once (each prints its port when it serves)
+    launched = [{n: launch_bench(n, 1.0) for n in BENCHES} for _ in range(houses)]
+    benches = [{n: port_of(p) for n, p in b.items()} for b in launched]
     procs = [p for b in benches for p, _ in b.values()]
     warmup = 5
     try:
         bare = bare_exchange(benches[0]["space_heating"][1])
         runs = [tmp / f"rt{houses}_{i}" for i in range(houses)]
         twins = [start_house({n: port for n, (_, port) in b.items()}, run, "--speed", "1", "--step", "1",
-                             "--hours", str(seconds / 3600.0), "--warmup", str(warmup), "--typeday", "1",
-                             "--start", "31") for b, run in zip(benches, runs)]
+                             "--hours", str(seconds / 3600.0), "--warmup", str(warmup), "--typeday", "1")
+                 for b, run in zip(benches, runs)]
         for twin in twins:
             twin.communicate(timeout=seconds + 120)
     finally:
@@ -143,16 +237,44 @@ def closed_loop(speed: float, step: float, tmp: Path) -> dict:
     return report
 
 
+def boundary_loops(hours: float, speed: float, tmp: Path) -> dict[str, dict]:
+    """SF3 with the brine bench and house 1 on the coses grid with the grid bench, at once: the
+    report of each (phil/report.py)."""
+    cases = {"brine": ("house3", ()), "grid": ("house1", ("--district", "coses"))}
+    launched = {name: launch_bench(name, speed) for name in cases}
+    benches = {name: port_of(p) for name, p in launched.items()}
+    twins = {}
+    try:
+        for name, (house, extra) in cases.items():
+            twins[name] = start_house({name: benches[name][1]}, tmp / f"{name}_run", "--speed", str(speed),
+                                      "--step", "2", "--hours", str(hours), "--warmup", "300", "--typeday", "1",
+                                      *extra, house=house)
+        for twin in twins.values():
+            twin.communicate(timeout=(hours * 3600.0 + 300.0) / speed + 300)
+    finally:
+        stop([p for p, _ in benches.values()])
+    return {name: json.loads((tmp / f"{name}_run" / "report.json").read_text()) for name in cases}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=120.0, help="real-time part: s per run")
     ap.add_argument("--houses", type=int, default=5, help="houses at once in the second real-time run")
     ap.add_argument("--speed", type=float, default=330.0, help="closed loop: real time x SPEED")
     ap.add_argument("--step", type=float, default=3.0, help="closed loop: exchange step [s simulated]")
+    ap.add_argument("--boundary-hours", type=float, default=0.5, help="brine and grid loops: counted hours")
+    ap.add_argument("--boundary-speed", type=float, default=200.0, help="brine and grid loops: real time x SPEED")
     a = ap.parse_args()
     t_all = time.perf_counter()
+    walls = {}
+    load = [os.getloadavg()]        # real-time figures move with the machine's load: stated with them
+    preload()
+    walls["imports and the houses' compile"] = time.perf_counter() - t_all
     with tempfile.TemporaryDirectory(prefix="phil_loop_") as tmp:
-        rt = [realtime(1, a.seconds, Path(tmp)), realtime(a.houses, a.seconds, Path(tmp))]
+        rt = [realtime(1, a.seconds, Path(tmp))]
+        walls["real time, 1 house"] = time.perf_counter() - t_all - sum(walls.values())
+        rt.append(realtime(a.houses, a.seconds, Path(tmp)))
+        walls[f"real time, {a.houses} houses"] = time.perf_counter() - t_all - sum(walls.values())
         for r in rt:
             print(f"real time, {r['houses']} house(s) x 3 benches, 1 s steps, {a.seconds:g} s: "
                   f"exchange median {r['exchange_median_ms']:.2f} ms, p99 {r['exchange_p99_ms']:.2f} ms "
@@ -161,6 +283,9 @@ def main() -> int:
                   f"p99 {r['lateness_p99_ms']:.2f} ms; twin's step median {r['step_median_ms']:.2f} ms = "
                   f"{r['cycle_share_pct']:.2f} % of the 1 s cycle", flush=True)
         day = closed_loop(a.speed, a.step, Path(tmp))
+        walls["SF1 closed loop"] = time.perf_counter() - t_all - sum(walls.values())
+        edge = boundary_loops(a.boundary_hours, a.boundary_speed, Path(tmp))
+        walls["brine and grid loops"] = time.perf_counter() - t_all - sum(walls.values())
     sh = day["benches"]["space_heating"]
     print(f"SF1 closed loop, type day 1, 24 h at {a.speed:g}x, {a.step:g} s steps: stopped: {day['stop_reason']}")
     for name, b in day["benches"].items():
@@ -171,12 +296,26 @@ def main() -> int:
     print(f"  comparison: the same house alone with an ideal bench used {day['alone_space_heating_kWh']:.3f} kWh "
           f"for space heating ({100 * (sh['heat_model_kWh'] / day['alone_space_heating_kWh'] - 1):+.2f} % in PHIL); "
           f"lateness p99 {day['lateness_ms']['p99']:.2f} ms at a {day['cycle_s'] * 1e3:.1f} ms cycle")
-    print(f"wall time {time.perf_counter() - t_all:.0f} s")
+    print(f"SF3 brine (house 3) and grid (house 1 at sf1 of coses) at once, type day 1 from midnight, "
+          f"{a.boundary_hours:g} h counted at {a.boundary_speed:g}x, 2 s steps:")
+    for name, r in edge.items():
+        b = r["benches"][name]
+        print(f"  {name:6s} stopped: {r['stop_reason']}; heat bench {b['heat_bench_kWh']:.3f} kWh, model "
+              f"{b['heat_model_kWh']:.3f} kWh ({b['heat_error_pct']:+.3f} %; same span {b['heat_error_same_span_pct']:+.3f} %, "
+              f"clock drift {b['clock_drift_s']:+.1f} s); follow RMS "
+              + ", ".join(f"{k} {'n/a' if v is None else f'{v:.3f}'}" for k, v in b["follow_rms"].items())
+              + f"; lateness p99 {r['lateness_ms']['p99']:.2f} ms at a {r['cycle_s'] * 1e3:.1f} ms cycle")
+    load.append(os.getloadavg())
+    print("wall time " + ", ".join(f"{k} {v:.0f} s" for k, v in walls.items())
+          + f"; in all {time.perf_counter() - t_all:.0f} s; load average (1, 5, 15 min) at the start "
+          + "{:.2f} {:.2f} {:.2f}, at the end {:.2f} {:.2f} {:.2f}".format(*load[0], *load[1]))
     print(f"RESULT phil_heat_error_pct={sh['heat_error_pct']:.4f}")
     print(f"RESULT phil_exchange_p99_ms={rt[0]['exchange_p99_ms']:.3f}")
     print(f"RESULT phil_lateness_p99_ms={rt[0]['lateness_p99_ms']:.3f}")
     print(f"RESULT phil_exchange_p99_ms_{a.houses}_houses={rt[1]['exchange_p99_ms']:.3f}")
     print(f"RESULT phil_lateness_p99_ms_{a.houses}_houses={rt[1]['lateness_p99_ms']:.3f}")
+    for name in ("brine", "grid"):
+        print(f"RESULT phil_{name}_heat_error_pct={edge[name]['benches'][name]['heat_error_same_span_pct']:.4f}")
     return 0
 
 

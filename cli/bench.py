@@ -4,6 +4,7 @@ serves it (`twin phil ... --bench NAME=serve:HOST:PORT`)."""
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import os
 import signal
@@ -59,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
         server = BenchServer(args.name, host or "127.0.0.1", int(port), args.speed, args.seed, params).start()
         print(f"bench {args.name} on Modbus TCP {host}:{server.port} (unit {server.map.dmap.unit_id}), "
               f"speed {args.speed:g}", flush=True)
+    gc.freeze()     # as twin phil (cli/phil.py): the loaded modules are never collected in a full collection
     done = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: done.set())
