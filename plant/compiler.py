@@ -23,12 +23,11 @@ once at its source and once at its sink and the energy ledger closes to round-of
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from difflib import get_close_matches
 
 import numpy as np
 
-from .component import Instance, pack
-from .errors import ConfigError
+from .component import Instance, is_number, pack
+from .errors import ConfigError, did_you_mean
 from .generated import PHASES, load_module, source  # noqa: F401 (load_module: House)
 from .signals import Signal, SignalCatalogue
 
@@ -229,7 +228,7 @@ class Context:
         st = self.instances[storage]
         h = inst.options[key]
         H, n = st.params.height, st.params.n_layers
-        if not isinstance(h, (int, float)) or isinstance(h, bool) or not 0.0 <= h <= H:
+        if not is_number(h) or not 0.0 <= h <= H:
             self.problems.append(f"{inst.at(key)} = {h!r}: outside the storage {storage!r}; "
                                  f"allowed 0 … {H} m (its height)")
             return 0
@@ -270,10 +269,9 @@ class Context:
             elif self.problems:
                 out.append("0")  # a consequence of a problem reported already
             else:
-                close = get_close_matches(part, catalogue.names, n=3, cutoff=0.6)
                 self.problems.append(f"signal {part!r} is read but no component provides it; "
-                                     + (f"did you mean {', '.join(close)}?" if close else
-                                        "check the links of the controllers and connections"))
+                                     + did_you_mean(part, catalogue.names,
+                                                    "check the links of the controllers and connections"))
                 out.append("0")
         return "".join(out)
 
@@ -316,9 +314,8 @@ def _check_controller_links(c: Context, catalogue: SignalCatalogue) -> None:
         for key in getattr(c.kinds[inst.kind], "SIGNAL_LINKS", ()):
             name = inst.options.get(key)
             if isinstance(name, str) and name not in catalogue:
-                close = get_close_matches(name, catalogue.names, n=3, cutoff=0.6)
                 c.problems.append(f"{inst.at(key)} = {name!r}: no such signal; "
-                                  + (f"did you mean {', '.join(close)}?" if close else "list them with `twin signals`"))
+                                  + did_you_mean(name, catalogue.names, "list them with `twin signals`"))
         for table, want in (("inputs", None), ("outputs", "input")):
             links = inst.options.get(table) if isinstance(inst.options, dict) else None
             if not isinstance(links, dict) or inst.kind == "profiles":
@@ -332,10 +329,8 @@ def _check_controller_links(c: Context, catalogue: SignalCatalogue) -> None:
                         owner not in c.instances or owner in c.failed | _owners_of_failed(c)):
                     continue  # its owner's bad declaration is reported already
                 if name not in catalogue:
-                    close = get_close_matches(name, catalogue.names, n=3, cutoff=0.6)
                     c.problems.append(f"{inst.at(table)}.{key} = {name!r}: no such signal; "
-                                      + (f"did you mean {', '.join(close)}?" if close else
-                                         "list them with `twin signals`"))
+                                      + did_you_mean(name, catalogue.names, "list them with `twin signals`"))
                 elif want and catalogue.signal(name).causality != want:
                     c.problems.append(f"{inst.at(table)}.{key} = {name!r}: is an "
                                       f"{catalogue.signal(name).causality}; a controller writes inputs: "

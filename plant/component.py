@@ -15,15 +15,49 @@ from __future__ import annotations
 import dataclasses
 from collections import namedtuple
 from dataclasses import dataclass, field, fields
+from typing import NamedTuple
 
 import numpy as np
 
-from .errors import ConfigError
+from .errors import ConfigError, did_you_mean
 
 
 def param(default, unit: str, doc: str, lo: float | None = None, hi: float | None = None):
     """Declare a parameter field: default value, unit ('1' for fractions, 'degC', 'W', ...), meaning, range."""
     return field(default=default, metadata={"unit": unit, "doc": doc, "lo": lo, "hi": hi})
+
+
+def is_number(value) -> bool:
+    """An int or float as TOML gives them; true and false are not numbers here."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+class Link(NamedTuple):
+    """A link as a kind declares it (`link(...)`); a plain (default, meaning) pair is one too."""
+
+    default: object
+    meaning: str
+    type: type | None = None
+    range: tuple | None = None
+
+
+def link(default, meaning: str, type: type | None = None, range: tuple | None = None) -> Link:
+    """Declare a link: default (REQUIRED: must be given), meaning, and what the declaration checks
+    before the kind sees it: type=int with range=(lo, hi), or type=str with range = the allowed
+    values. A bad value is reported and replaced by the default, so the kind's code runs on."""
+    return Link(default, meaning, type, range)
+
+
+def link_problem(spec, value) -> str | None:
+    """What is wrong with a typed link's value (the message after "key = value"), or None."""
+    spec = Link(*spec)
+    if spec.type is int:
+        lo, hi = spec.range
+        if not is_number(value) or not isinstance(value, int) or not lo <= value <= hi:
+            return f"must be an integer {lo} … {hi}"
+    elif spec.type is str and value not in spec.range:
+        return f"unknown; allowed: {', '.join(spec.range)}"
+    return None
 
 
 def describe(params_cls) -> list[dict]:
@@ -44,10 +78,7 @@ def build_params(params_cls, values: dict, where: str):
     kwargs = {}
     for key, value in values.items():
         if key not in known:
-            from difflib import get_close_matches
-
-            close = get_close_matches(key, known, n=3)
-            hint = f"did you mean {', '.join(close)}?" if close else f"allowed: {', '.join(sorted(known))}"
+            hint = did_you_mean(key, known, f"allowed: {', '.join(sorted(known))}")
             problems.append(f"{where} {key}: unknown parameter; {hint}")
             continue
         f = known[key]
@@ -56,7 +87,7 @@ def build_params(params_cls, values: dict, where: str):
                 problems.append(f"{where} {key} = {value!r}: must be true or false")
                 continue
         elif isinstance(f.default, (int, float)):
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
+            if not is_number(value):
                 problems.append(f"{where} {key} = {value!r}: must be a number [{f.metadata['unit']}]")
                 continue
             lo, hi = f.metadata.get("lo"), f.metadata.get("hi")
@@ -113,7 +144,8 @@ def indices(declaration, name: str = ""):
     return namedtuple(name, names)(*range(len(names)))
 
 
-__all__ = ["param", "describe", "build_params", "pack", "index_of", "indices", "dataclass", "dataclasses"]
+__all__ = ["param", "link", "Link", "link_problem", "is_number", "describe", "build_params", "pack", "index_of",
+           "indices", "dataclass", "dataclasses"]
 
 
 @dataclass
@@ -139,8 +171,11 @@ class Kind:
     """A component kind as the compiler sees it (plant/compiler.py): its parameters, the link
     keys a house file may give beside them, and the code it emits into the step's phases.
 
-    LINKS maps each link key to (default, meaning); a default of REQUIRED must be given. A kind
-    that carries water between others implements the protocol its role needs:
+    LINKS maps each link key to `link(default, meaning, type=..., range=...)` (or a plain
+    (default, meaning) pair); a default of REQUIRED must be given. The declaration checks a typed
+    link's value, then the instances a REFS key names, then calls `check(inst, problems)` for
+    what spans several links. A kind that carries water between others implements the protocol
+    its role needs:
       generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals
       consumer   emit_consumer(c, inst, T_sup) -> (m_flow, T_return expression for `volumes`)
       emitter    emit_emitter(c, inst, m_flow, T_sup) -> T_return local
@@ -155,6 +190,12 @@ class Kind:
 
     def initial_state(self, inst) -> np.ndarray:
         return np.zeros(0)
+
+    def check(self, inst, problems: list) -> None:
+        """Append what is wrong between the instance's links (each is of its declared type and
+        a named instance exists with the right role by now; a bad one is its default or None).
+        What needs another instance's parameters (a height inside a storage) is the
+        compiler's to check, where the kind emits."""
 
     def emit(self, c, inst) -> None:
         """Code of the instance's own phases (a generator or consumer emits when its coupling

@@ -16,11 +16,10 @@ values before the checks, e.g. {"storage.UA_loss": 25.0, "switch.idle_flow.chp":
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from difflib import get_close_matches
 from pathlib import Path
 
-from .component import REQUIRED, Instance, build_params
-from .errors import ConfigError
+from .component import REQUIRED, Instance, build_params, is_number, link_problem
+from .errors import ConfigError, did_you_mean
 from .housefile import HOUSES, line_of, read, resolve  # noqa: F401 (the names house files are found by)
 HOUSE_KEYS = ("name", "description", "start", "base")
 PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday", "dhw_series")
@@ -45,8 +44,7 @@ class Declaration:
 
 
 def _hint(bad: str, names, what: str) -> str:
-    close = get_close_matches(str(bad), list(names), n=3, cutoff=0.5)
-    return f"did you mean {', '.join(close)}?" if close else f"{what}: {', '.join(sorted(names))}"
+    return did_you_mean(bad, names, f"{what}: {', '.join(sorted(names))}", cutoff=0.5)
 
 
 def parse(doc: dict, path: Path, text: str, overrides: dict | None = None) -> Declaration:
@@ -108,7 +106,7 @@ def _profiles(prof: dict, path: Path, text: str, problems: list) -> tuple:
     kwh = prof.get("household_kwh_per_year", 6500.0)
     litres = prof.get("dhw_litres_per_day", 300.0)
     for key, v, hi in (("household_kwh_per_year", kwh, 1e6), ("dhw_litres_per_day", litres, 1e5)):
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 <= v <= hi:
+        if not is_number(v) or not 0 <= v <= hi:
             problems.append(f"{path}:{line_of(text, 'profiles', key)} [profiles] {key} = {v!r}: "
                             f"must be a number 0 … {hi:g}")
     from profiles.loaders import DHW_SERIES
@@ -170,7 +168,7 @@ def _values_and_options(name: str, kind: str, k, table: dict, where: str, path: 
         else:
             problems.append(f"{path}:{line_of(text, name, key)} [{name}] {key}: not a parameter or link "
                             f"of a {kind}; " + _hint(key, pnames + list(links), "allowed"))
-    for key, (default, meaning) in links.items():
+    for key, (default, meaning, *_) in links.items():
         if key not in options:
             if default is REQUIRED:
                 problems.append(f"{where} {key}: missing; a {kind} needs it ({meaning})")
@@ -187,6 +185,7 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
 
     used: dict[tuple[str, str], str] = {}
     for inst in list(instances.values()):
+        _check_typed(inst, KINDS[inst.kind].LINKS, problems)
         for key, role in KINDS[inst.kind].REFS.items():
             if key not in inst.options or inst.options[key] is None:
                 continue
@@ -223,27 +222,7 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                 inst.options[key] = keep  # the good names stay, so one bad name hides no other problem
             elif bad:
                 inst.options[key] = None
-        if inst.kind == "coupling_point":
-            if not inst.options.get("generators") and not inst.options.get("consumers"):
-                problems.append(f"{inst.where} generators, consumers: a coupling point needs a pumped branch "
-                                "(a generator or a consumer); a loop with no pump carries no flow")
-            gens = inst.options.get("generators") or []
-            for key in ("idle_flow", "pump_coupling"):
-                table = inst.options.get(key)
-                if not isinstance(table, dict):
-                    problems.append(f"{inst.where} {key} = {table!r}: expected {{ generator = share }}")
-                    inst.options[key] = {}
-                    continue
-                for g, share in table.items():
-                    if g not in gens:
-                        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key}.{g}: not a "
-                                        "generator of this point; " + _hint(g, gens, "its generators"))
-                    elif isinstance(share, bool) or not isinstance(share, (int, float)) or not 0 <= share <= 1:
-                        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key}.{g} = "
-                                        f"{share!r}: must be a share 0 … 1")
-            if inst.options.get("hydraulics") not in ("prescribed", "pressure_driven"):
-                problems.append(f"{path}:{line_of(text, inst.name, 'hydraulics')} [{inst.name}] hydraulics = "
-                                f"{inst.options.get('hydraulics')!r}: unknown; allowed: prescribed, pressure_driven")
+        KINDS[inst.kind].check(inst, problems)
     for inst in instances.values():
         kind = KINDS[inst.kind]
         role = kind.role
@@ -253,6 +232,17 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
                             f"point's {' or '.join(r + 's' for r in roles)}")
         if role == "emitter" and (inst.name, role) not in used:
             problems.append(f"{inst.where}: an emitter fed by nothing; name it as a mixing station's emitter")
+
+
+def _check_typed(inst: Instance, links: dict, problems: list) -> None:
+    """Each typed link (`link(..., type=...)`) holds a value of its type; a bad one is reported
+    and replaced by its default."""
+    for key, spec in links.items():
+        value = inst.options.get(key)
+        problem = None if value is None else link_problem(spec, value)
+        if problem:
+            problems.append(f"{inst.at(key)} = {value!r}: {problem}")
+            inst.options[key] = spec[0]
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None) -> Declaration:

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import boundary, compiler, declaration
 from .compiler import Instance
-from .errors import ConfigError
+from .errors import ConfigError, closest
 from .schedule import n_steps
 
 CONTROLLERS = ("rule_based", "external")
@@ -156,10 +156,8 @@ class House:
     def state(self, instance: str) -> np.ndarray:
         """A copy of one instance's state vector (e.g. the storage layer temperatures, top first)."""
         if instance not in self._plant.x_slices:
-            from difflib import get_close_matches
-
             raise ConfigError(f"{self.name}: no state of {instance!r}; instances with a state: "
-                              + ", ".join(get_close_matches(instance, self._plant.x_slices, n=3)
+                              + ", ".join(closest(instance, self._plant.x_slices)
                                           or sorted(self._plant.x_slices)))
         a, b = self._plant.x_slices[instance]
         return self._x[a:b].copy()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import copy
 import re
-from difflib import get_close_matches
 from functools import lru_cache
 from pathlib import Path
 
@@ -13,7 +12,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-from .errors import ConfigError
+from .errors import ConfigError, closest
 
 HOUSES = Path(__file__).parent / "houses"
 # the CoSES laboratory's names of the five houses (reference §12), accepted wherever a house is named
@@ -100,7 +99,7 @@ def read(path: Path, _seen: tuple = ()) -> dict:
     for name in doc["house"].get("remove", []):
         if name not in merged or name in ("house", "profiles"):
             raise ConfigError(f"{path}: [house] remove = {name!r}: the base {base!r} declares no such "
-                              "instance; " + ", ".join(get_close_matches(name, [k for k in merged if k not in ("house", "profiles")])
+                              "instance; " + ", ".join(closest(name, [k for k in merged if k not in ("house", "profiles")])
                                           or [k for k in merged if k not in ("house", "profiles")]))
         del merged[name]
     for name, table in doc.items():

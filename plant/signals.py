@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from difflib import get_close_matches
 
-from .errors import SignalError
+from .errors import SignalError, did_you_mean
 
 CAUSALITIES = ("input", "output", "parameter", "state")
 
@@ -73,8 +72,7 @@ class SignalCatalogue:
         try:
             return self._by_name[name]
         except KeyError:
-            close = get_close_matches(str(name), self._by_name, n=3, cutoff=0.6)
-            hint = f"did you mean {', '.join(close)}?" if close else "list them with `twin signals HOUSE`"
+            hint = did_you_mean(name, self._by_name, "list them with `twin signals HOUSE`")
             raise SignalError(f"unknown signal {name!r}; {hint}") from None
 
     def index(self, name: str) -> int:

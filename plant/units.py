@@ -21,12 +21,11 @@ Used by the device maps' codec, recordings and columns files, diagnosis, FMU bin
 """
 from __future__ import annotations
 
-import difflib
 from fractions import Fraction
 from functools import cache
 from typing import NamedTuple
 
-from .errors import ConfigError
+from .errors import ConfigError, closest
 from .water import RHO
 
 
@@ -107,7 +106,7 @@ def unit(name: str, where: str = "") -> Unit:
     try:
         return UNITS[name]
     except (KeyError, TypeError):
-        close = difflib.get_close_matches(str(name), [u for u in UNITS if u], n=3)
+        close = closest(name, [u for u in UNITS if u])
         raise ConfigError(f"{where + ': ' if where else ''}unit {name!r} unknown; "
                           + (f"closest: {', '.join(close)}" if close else
                              f"known: {', '.join(sorted(u for u in UNITS if u))}")) from None

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, is_number, pack, param
 from ..water import CP
 
 STATES = ()
@@ -103,7 +103,7 @@ class CoilKind(Kind):
         p = c.param(inst, pack(inst.params))
         st = inst.options["storage"]
         ua = inst.options["UA"]
-        if isinstance(ua, bool) or not isinstance(ua, (int, float)) or not ua > 0:
+        if not is_number(ua) or not ua > 0:
             c.problems.append(f"{inst.at('UA')} = {ua!r}: a conductance > 0 W/K")
             ua = 1.0
         ports = c.storage_ports(st)

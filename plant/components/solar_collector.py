@@ -84,7 +84,7 @@ import numpy as np
 from numba import njit
 
 from .. import sun
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, is_number, pack, param
 from ..water import CP
 
 
@@ -328,7 +328,7 @@ class Kind(ComponentKind):
         for side in ("upper", "lower") if valve else ("",):
             top, bottom = (f"{k}.{side}" if side else k for k in ("top", "bottom"))
             t, b = o.get(top, o["top"]), o.get(bottom, o["bottom"])
-            if _number(t) and _number(b) and t < b:
+            if is_number(t) and is_number(b) and t < b:
                 c.problems.append(f"{inst.at(top)} = {t}: must be above {bottom} = {b}")
         ua_up = inst.params.UA_upper
         if valve and not ua_up > 0.0:
@@ -337,11 +337,7 @@ class Kind(ComponentKind):
         if not valve and ua_up > 0.0:
             c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: only with two coils, top = {{ upper = ..., "
                               "lower = ... } and bottom = { upper = ..., lower = ... }")
-        if valve and isinstance(o["top"], dict) and _number(o["top"].get("upper")) and _number(o["top"].get("lower")) \
+        if valve and isinstance(o["top"], dict) and is_number(o["top"].get("upper")) and is_number(o["top"].get("lower")) \
                 and o["top"]["upper"] <= o["top"]["lower"]:
             c.problems.append(f"{inst.at('top.upper')} = {o['top']['upper']}: the upper coil's inlet must be above "
                               f"the lower coil's, top.lower = {o['top']['lower']}")
-
-
-def _number(v) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)

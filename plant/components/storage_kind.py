@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..component import Kind as ComponentKind, pack
+from ..component import Kind as ComponentKind, is_number, link, pack
 from ..water import CP, RHO
 from . import storage
 
@@ -62,7 +62,8 @@ class Kind(ComponentKind):
     name = "storage"
     Params = storage.Params
     role = "storage"
-    LINKS = {"sensors": (10, "number of temperature sensors at equally spaced heights (1 = bottom)"),
+    LINKS = {"sensors": link(10, "number of temperature sensors at equally spaced heights (1 = bottom)",
+                             type=int, range=(1, 100)),
              "sensor_heights": (None, "relative heights 0 (bottom) ... 1 (top) of the sensors, sensor 1 first "
                                       "(instead of equally spaced ones)"),
              "sensor_lag": ({}, "sensor number = first-order time constant [s] (an effect: thermowell lag)")}
@@ -87,13 +88,10 @@ class Kind(ComponentKind):
         x = c.state(inst, self.initial_state(inst))
         p = c.param(inst, pack(inst.params))
         n = inst.options["sensors"]
-        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 100:
-            c.problems.append(f"{inst.at('sensors')} = {n!r}: must be an integer 1 … 100")
-            n = 10
         heights = inst.options.get("sensor_heights")
         if heights is not None:
             if (not isinstance(heights, list) or not heights or len(heights) > 100
-                    or any(isinstance(z, bool) or not isinstance(z, (int, float)) or not 0 <= z <= 1 for z in heights)):
+                    or any(not is_number(z) or not 0 <= z <= 1 for z in heights)):
                 c.problems.append(f"{inst.at('sensor_heights')} = {heights!r}: a list of relative heights "
                                   "0 (bottom) … 1 (top), sensor 1 first")
                 heights = None
@@ -139,7 +137,7 @@ class Kind(ComponentKind):
         tau = np.zeros(n)
         for key, v in table.items():
             ok = str(key).isdigit() and 1 <= int(key) <= n
-            if not ok or isinstance(v, bool) or not isinstance(v, (int, float)) or not v >= 0:
+            if not ok or not is_number(v) or not v >= 0:
                 c.problems.append(f"{inst.at('sensor_lag')}.{key} = {v!r}: sensor 1 … {n}, time constant >= 0 s")
                 continue
             tau[int(key) - 1] = float(v)

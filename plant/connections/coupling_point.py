@@ -22,7 +22,8 @@ import math
 
 import numpy as np
 
-from ..component import REQUIRED, Kind as ComponentKind
+from ..component import REQUIRED, Kind as ComponentKind, is_number, link
+from ..errors import did_you_mean
 
 
 # inflow slots of a plume: half of an 80-layer tank. A 40-layer plume plant steps about 10 %
@@ -36,7 +37,8 @@ class Kind(ComponentKind):
     role = "connection"
     REFS = {"generators": "generator", "consumers": "consumer", "storage": "storage",
             "supply": "volume", "return": "volume"}
-    LINKS = {"hydraulics": ("prescribed", "prescribed (ideal switch) or pressure_driven"),
+    LINKS = {"hydraulics": link("prescribed", "prescribed (ideal switch) or pressure_driven", type=str,
+                                range=("prescribed", "pressure_driven")),
              "generators": ((), "generator instances on the point, in the order they are stepped"),
              "consumers": ((), "consumer instances (pumped: mixing stations, coils)"),
              "storage": (REQUIRED, "the storage that separates generators and consumers"),
@@ -48,6 +50,25 @@ class Kind(ComponentKind):
              "idle_flow": ({}, "generator = share of the consumers' deficit through its branch"),
              "pump_coupling": ({}, "generator = share of the earlier generators' flow through it"),
              "network": ({}, "pressure_driven: resistances and pump curves (plant/hydraulics/pressure_driven.py)")}
+
+    def check(self, inst, problems):
+        """A pumped branch, and shares only for the point's own generators."""
+        if not inst.options.get("generators") and not inst.options.get("consumers"):
+            problems.append(f"{inst.where} generators, consumers: a coupling point needs a pumped branch "
+                            "(a generator or a consumer); a loop with no pump carries no flow")
+        gens = inst.options.get("generators") or []
+        for key in ("idle_flow", "pump_coupling"):
+            table = inst.options.get(key)
+            if not isinstance(table, dict):
+                problems.append(f"{inst.where} {key} = {table!r}: expected {{ generator = share }}")
+                inst.options[key] = {}
+                continue
+            for g, share in table.items():
+                if g not in gens:
+                    problems.append(f"{inst.at(key)}.{g}: not a generator of this point; "
+                                    + did_you_mean(g, gens, f"its generators: {', '.join(sorted(gens))}", cutoff=0.5))
+                elif not is_number(share) or not 0 <= share <= 1:
+                    problems.append(f"{inst.at(key)}.{g} = {share!r}: must be a share 0 … 1")
 
     def emit(self, c, inst):
         o = inst.options

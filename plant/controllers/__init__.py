@@ -1,7 +1,7 @@
 """Built-in controllers: components from measurements (signal links) to commands."""
 from __future__ import annotations
 
-from difflib import get_close_matches
+from ..errors import did_you_mean
 
 
 def read(c, inst, key: str) -> str:
@@ -52,7 +52,5 @@ def check_keys(c, inst, inputs: tuple, outputs: tuple) -> None:
     for table, allowed in (("inputs", inputs), ("outputs", outputs)):
         for key in inst.options[table]:
             if key not in allowed:
-                close = get_close_matches(key, allowed, n=2)
                 c.problems.append(f"{inst.at(table)}.{key}: not a {table[:-1]} of a {inst.kind} "
-                                  "controller; " + (f"did you mean {', '.join(close)}?" if close
-                                                    else f"allowed: {', '.join(allowed)}"))
+                                  "controller; " + did_you_mean(key, allowed, f"allowed: {', '.join(allowed)}", n=2))

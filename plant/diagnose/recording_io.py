@@ -17,7 +17,6 @@ the unit are rejected.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from difflib import get_close_matches
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +27,7 @@ from profiles.recording import write_csv as write_table
 
 from .. import units as unit_table
 from ..catalogue import CATALOGUE
-from ..errors import ConfigError, DataError
+from ..errors import ConfigError, DataError, closest
 
 # plausible range of a converted value per catalogue unit (catches e.g. Kelvin labelled degC)
 PLAUSIBLE = {"degC": (-40.0, 130.0), "kg/s": (-5.0, 5.0), "W": (-2e5, 2e5), "V": (-1.0, 11.0)}
@@ -125,13 +124,13 @@ def _mapped_columns(p: Path, rec, mapping, warnings: list) -> tuple[dict, dict]:
     problems = []
     for col, sig in rec.signals.items():
         if sig not in CATALOGUE:
-            close = get_close_matches(str(sig), CATALOGUE.names, n=2)
+            close = closest(sig, CATALOGUE.names, n=2)
             problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
                             + (f"; did you mean {', '.join(close)}?" if close else
                                "; list them with `twin signals house1`"))
             continue
         if col not in rec.names:
-            close = get_close_matches(col, rec.names, n=2)
+            close = closest(col, rec.names, n=2)
             problems.append(f"{mapping}: [columns] {col!r}: no such column in {p.name}"
                             + (f"; did you mean {', '.join(close)}?" if close else ""))
             continue
@@ -192,7 +191,7 @@ def _check_ports(ports: dict, mapping) -> None:
     storages = sorted({s.split(".", 1)[0] for s in CATALOGUE.names if ".T_sensor_" in s})
     for name in ports:
         if name not in storages:
-            close = get_close_matches(name, storages, n=2)
+            close = closest(name, storages, n=2)
             raise ConfigError(f"{mapping}: [ports] {name}: not a storage of the twin"
                               + (f"; did you mean {', '.join(close)}?" if close else f"; storages: {', '.join(storages)}"))
 

@@ -10,7 +10,6 @@ binding mistake costs nothing; each one is an FmuError naming the FMU file and t
 """
 from __future__ import annotations
 
-import difflib
 import shutil
 import tempfile
 from pathlib import Path
@@ -18,7 +17,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import FmuError
+from ..errors import FmuError, closest
 from ..units import UNITS, convertible, factors
 from .inspect import inspect_fmu
 
@@ -89,7 +88,7 @@ class BoundFmu:
     def _variable(self, name: str, role: str):
         v = self._vars.get(name)
         if v is None:
-            close = difflib.get_close_matches(name, list(self._vars), n=3, cutoff=0.6)
+            close = closest(name, self._vars)
             hint = f"; did you mean {', '.join(repr(c) for c in close)}?" if close else ""
             raise FmuError(f"{self.path}: {role} variable '{name}' does not exist in the FMU{hint}")
         return v

@@ -6,11 +6,11 @@ file is reported at once, with file:line, key and the fix.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from difflib import get_close_matches
 from pathlib import Path
 
+from ..component import is_number
 from ..housefile import line_of, read
-from ..errors import ConfigError
+from ..errors import ConfigError, did_you_mean
 
 
 def load(path: Path) -> "FmuHouseSpec":
@@ -89,10 +89,8 @@ def _check_sections_and_keys(doc: dict, house: dict, path: Path, text: str, prob
                             "([house] topology = \"fmu\"); allowed: [house], [bindings], [parameters]")
     for key in house:
         if key not in FMU_HOUSE_KEYS:
-            close = get_close_matches(key, FMU_HOUSE_KEYS, n=2)
             problems.append(f"{path}:{line_of(text, 'house', key)} [house] {key}: unknown for an FMU plant; "
-                            + (f"did you mean {', '.join(close)}?" if close else
-                               f"allowed: {', '.join(sorted(FMU_HOUSE_KEYS))}"))
+                            + did_you_mean(key, FMU_HOUSE_KEYS, f"allowed: {', '.join(sorted(FMU_HOUSE_KEYS))}", n=2))
 
 
 def _fmu_path(house: dict, path: Path, text: str, problems: list) -> Path | None:
@@ -122,7 +120,7 @@ def _solver(house: dict, path: Path, text: str, problems: list) -> tuple:
         v = house.get(key)
         if v is None:
             continue
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+        if not is_number(v) or not v > 0:
             problems.append(f"{path}:{line_of(text, 'house', key)} [house] {key} = {v!r}: must be a number > 0")
         else:
             numbers[key] = float(v)
@@ -149,9 +147,8 @@ def _bindings(doc: dict, path: Path, text: str, problems: list) -> dict:
     for signal, b in bindings_doc.items():
         loc = f"{path}:{line_of(text, 'bindings', signal)} [bindings] {signal}"
         if signal not in CATALOGUE:
-            close = get_close_matches(signal, CATALOGUE.names, n=3, cutoff=0.6)
             problems.append(f"{loc}: not a signal of the catalogue (plant/catalogue.py); "
-                            + (f"did you mean {', '.join(close)}?" if close else "list them with `twin signals house1`"))
+                            + did_you_mean(signal, CATALOGUE.names, "list them with `twin signals house1`"))
             continue
         if isinstance(b, str) and b:
             var, unit = b, None

@@ -28,13 +28,13 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from difflib import get_close_matches
 from pathlib import Path
 
 import numpy as np
 
-from ..component import Kind as ComponentKind
+from ..component import Kind as ComponentKind, is_number
 from ..components import storage, storage_kind
+from ..errors import did_you_mean
 from ..housefile import line_of
 
 _RUNNING: dict[int, "_Runtime"] = {}
@@ -98,9 +98,8 @@ def storage_fmu_spec(name: str, values: dict, path: Path, text: str, problems: l
     for role, b in bindings.items():
         loc = f"{path}:{line_of(text, name + '.bindings', role)} [{name}.bindings] {role}"
         if role not in STORAGE_ROLES:
-            close = get_close_matches(role, STORAGE_ROLES, n=2)
-            problems.append(f"{loc}: unknown role; " + (f"did you mean {', '.join(close)}?" if close
-                                                       else f"allowed: {', '.join(STORAGE_ROLES)}"))
+            problems.append(f"{loc}: unknown role; "
+                            + did_you_mean(role, STORAGE_ROLES, f"allowed: {', '.join(STORAGE_ROLES)}", n=2))
             continue
         if isinstance(b, str):
             var, unit = b, None
@@ -131,7 +130,7 @@ def storage_fmu_spec(name: str, values: dict, path: Path, text: str, problems: l
             value, unit = v["value"], v.get("unit")
         else:
             value, unit = v, None
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if not is_number(value):
             problems.append(f"{loc} = {v!r}: expected a number or {{ value = 70.0, unit = \"degC\" }}")
             continue
         if unit is not None and unit not in UNITS:
@@ -150,7 +149,7 @@ class Kind(ComponentKind):
     LINKS = {"fmu": (None, "path of the storage FMU, relative to the house file"),
              "bindings": (None, "role = FMU variable (m_flow, T_in_top, T_in_bottom, T_out, Q_loss, T_layer)"),
              "parameters": ({}, "FMU parameters: name = value or { value = ..., unit = ... }"),
-             "sensors": (10, "number of temperature sensors at equally spaced heights (1 = bottom)")}
+             "sensors": storage_kind.Kind.LINKS["sensors"]}
 
     def initial_state(self, inst):
         return storage.initial_state(inst.params)

@@ -40,11 +40,10 @@ Every problem is listed at once with file:line, key, value and the fix (ConfigEr
 """
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import ConfigError
+from ..errors import ConfigError, closest
 from ..housefile import line_of, resolve, tomllib
 from .network import GridSpec, PipeSpec
 
@@ -141,7 +140,7 @@ class _Reader:
     def unknown(self, section: str, t: dict, allowed: set) -> None:
         for k in t:
             if k not in allowed:
-                close = difflib.get_close_matches(k, sorted(allowed), 1)
+                close = closest(k, sorted(allowed), 1)
                 hint = f"did you mean {close[0]!r}?" if close else f"allowed: {', '.join(sorted(allowed))}"
                 self.problems.append(f"{self.where(section, k)}: [{section}] {k}: unknown key; {hint}")
 
@@ -164,7 +163,7 @@ def load_district(name_or_path: str | Path) -> District:
     r = _Reader(path, text, doc)
     for top in doc:
         if top not in ("district", "plant", "grid", "pipes", "houses"):
-            close = difflib.get_close_matches(top, ["district", "plant", "grid", "pipes", "houses"], 1)
+            close = closest(top, ["district", "plant", "grid", "pipes", "houses"], 1)
             r.problems.append(f"{r.where(top)}: [{top}]: unknown table" + (f"; did you mean [{close[0]}]?" if close else ""))
     d = r.table("district", True)
     r.unknown("district", d, KEYS["district"])
@@ -255,7 +254,7 @@ def _house(r: _Reader, name: str, h, nodes: list) -> HouseEntry | None:
         fp = Path(str(file))
     node = h.get("node")
     if node not in nodes:
-        close = difflib.get_close_matches(str(node), nodes, 1)
+        close = closest(node, nodes, 1)
         r.problems.append(f"{r.where(sec, 'node')}: [{sec}] node = {node!r}: not a node of the grid"
                           + (f"; did you mean {close[0]!r}?" if close else f"; nodes: {', '.join(nodes)}"))
     sub, ctl = h.get("substation", "rules"), h.get("controller", "built-in")
