@@ -91,16 +91,16 @@ class Kind(ComponentKind):
         m_gen, m_ch, m_dis = c.var("m_gen"), c.var("m_charge"), c.var("m_discharge")
         j = self._emit_storage_ports(c, inst, st, pv, p, mix_layers, flows, m_dem, m_gen, m_ch, m_dis,
                                      T_sh, T_rh)
-        a = st.name
+        out_T = c.storage_ports(st.name).array("out_T")
         pipe = c.module("plant.components.pipe")
         Hs, Hr, Qs, Qr = (c.var(v) for v in ("H_sup", "H_ret", "Q_loss_sup", "Q_loss_ret"))
         h_gen = " + ".join(f"{m} * CP * {T}" for m, T in flows) or "0.0"
         h_con = " + ".join(f"{m} * CP * {T}" for m, T in demand)
         m_con = " + ".join(m for m, _ in demand)
         c.emit("volumes",
-               f"{Hs} = {h_gen} + {m_dis} * CP * {a}_out_T[{j}]",
+               f"{Hs} = {h_gen} + {m_dis} * CP * {out_T}[{j}]",
                f"{Qs} = {pipe}.step(h, {x_sh}, {p_sh}, {Hs}, {m_gen} + {m_dis})",
-               f"{Hr} = {h_con + ' + ' if h_con else ''}{m_ch} * CP * {a}_out_T[{j}]",
+               f"{Hr} = {h_con + ' + ' if h_con else ''}{m_ch} * CP * {out_T}[{j}]",
                f"{Qr} = {pipe}.step(h, {x_rh}, {p_rh}, {Hr}, {m_con + ' + ' if m_con else ''}{m_ch})")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
@@ -153,8 +153,7 @@ class Kind(ComponentKind):
         n_in = max(PLUME_SLOTS, 1 + math.ceil(0.5 * st.params.n_layers)) if mix_layers > 0.0 else 1
         i0 = ports.add_inlet(inst, "storage_in", None, n_in)
         j = ports.add_outlet(inst, "storage_out", None)
-        a = st.name
-        c.values[f"{a}.fmu_inputs"] = (f"({m_ch} - {m_dis})", T_sh, T_rh)
+        c.values[f"{st.name}.fmu_inputs"] = (f"({m_ch} - {m_dis})", T_sh, T_rh)
         if st.kind == "storage_fmu":
             for key, want in (("storage_top", 0), ("storage_bottom", st.params.n_layers - 1)):
                 if pv[0 if key == "storage_top" else 1] != want:
@@ -162,26 +161,27 @@ class Kind(ComponentKind):
                                       f"bottom layers; this height is in layer {pv[0 if key == 'storage_top' else 1]} "
                                       f"of 0 … {st.params.n_layers - 1}")
         hyd, cmod = c.module("plant.hydraulics.prescribed"), c.module(__name__)
+        a, x_st, slots = ports.array, c.state_of(inst, st), f"[{i0}:{i0 + n_in}]"
         c.emit("hydraulics",
                f"{m_gen} = {' + '.join(m for m, _ in flows) or '0.0'}",
                f"{m_ch}, {m_dis} = {hyd}.split({m_gen}, {m_dem})",
-               f"{cmod}.inlet({a}_in_layer[{i0}:{i0 + n_in}], {a}_in_m[{i0}:{i0 + n_in}], "
-               f"{a}_in_T[{i0}:{i0 + n_in}], {p}[2], x_{a}.shape[0], {m_ch} > 0.0, "
+               f"{cmod}.inlet({a('in_layer')}{slots}, {a('in_m')}{slots}, "
+               f"{a('in_T')}{slots}, {p}[2], {x_st}.shape[0], {m_ch} > 0.0, "
                f"int({p}[0]) if {m_ch} > 0.0 else int({p}[1]), {m_ch} if {m_ch} > 0.0 else {m_dis}, "
                f"{T_sh} if {m_ch} > 0.0 else {T_rh})",
                f"if {m_ch} > 0.0:",
-               f"    {a}_out_layer[{j}] = int({p}[1])",
-               f"    {a}_out_m[{j}] = {m_ch}",
+               f"    {a('out_layer')}[{j}] = int({p}[1])",
+               f"    {a('out_m')}[{j}] = {m_ch}",
                "else:",
-               f"    {a}_out_layer[{j}] = int({p}[0])",
-               f"    {a}_out_m[{j}] = {m_dis}")
+               f"    {a('out_layer')}[{j}] = int({p}[0])",
+               f"    {a('out_m')}[{j}] = {m_dis}")
         return j
 
     def _storage_flow(self, c, inst, st):
         """The signal of the storage's net charging flow: <storage>.m_flow for the first point on a
         storage, <point>.m_flow_storage for any further one."""
         desc = "net charging flow through the coupling point (+ charging through the top, - discharging)"
-        if f"{st.name}.m_flow" in c._sig_index:
+        if c.has_signal(f"{st.name}.m_flow"):
             return c.signal(inst, "m_flow_storage", "kg/s", "output", desc)
         return c.named_signal(f"{st.name}.m_flow", "kg/s", "output", desc, st.order)
 
@@ -208,7 +208,6 @@ class Kind(ComponentKind):
         except Exception as exc:  # ConfigError listing every bad key
             c.problems.extend(str(exc).splitlines())
             params = net.NetworkParams()
-        inst.network = params
         pn = c.param(inst, net.pack(params), suffix="_net")
         xn = c.state(inst, np.zeros(1), suffix="_net")  # the supply pressure: the next solve's start
         sol = c.float_array(net.N_SOL)
