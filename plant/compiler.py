@@ -225,11 +225,13 @@ class Context:
     def port_layer(self, inst: Instance, key: str, storage: str) -> int:
         """Layer of the port inst.options[key] (a height in m) in `storage`; a height outside the
         tank is a problem naming the instance, key and the allowed range."""
+        return self._layer(inst.at(key), inst.options[key], storage)
+
+    def _layer(self, where: str, h, storage: str) -> int:
         st = self.instances[storage]
-        h = inst.options[key]
         H, n = st.params.height, st.params.n_layers
         if not is_number(h) or not 0.0 <= h <= H:
-            self.problems.append(f"{inst.at(key)} = {h!r}: outside the storage {storage!r}; "
+            self.problems.append(f"{where} = {h!r}: outside the storage {storage!r}; "
                                  f"allowed 0 … {H} m (its height)")
             return 0
         return n - 1 - min(int(h / H * n), n - 1)
@@ -245,12 +247,7 @@ class Context:
         if set(v) != {"upper", "lower"}:
             self.problems.append(f"{inst.at(key)} = {v!r}: a three-way valve needs {{ upper = ..., lower = ... }}")
             return 0, 0
-        layers = []
-        for side in ("upper", "lower"):
-            inst.options[f"{key}.{side}"] = v[side]
-            inst.lines.setdefault(f"{key}.{side}", inst.lines.get(key))
-            layers.append(self.port_layer(inst, f"{key}.{side}", storage))
-        return layers[0], layers[1]
+        return tuple(self._layer(f"{inst.at(key)}.{side}", v[side], storage) for side in ("upper", "lower"))
 
     # --- assembly ------------------------------------------------------------------------
     def catalogue(self) -> SignalCatalogue:

@@ -278,24 +278,25 @@ class Kind(ComponentKind):
     def _emit_coils(self, c, inst, st, k, k_up, p, m, T_sup):
         """The coil requests of the step; returns (the valve-side local or None, the coil outlet
         expression)."""
+        a = c.storage_ports(st).array
         if k_up is None:
             c.emit("hydraulics",
-                   f"{st}_coil_m[{k}] = {m}",
-                   f"{st}_coil_Tin[{k}] = {T_sup}",
-                   f"{st}_coil_UA[{k}] = {p}[{P.UA}]")
-            return None, f"{st}_coil_Tout[{k}]"
+                   f"{a('coil_m')}[{k}] = {m}",
+                   f"{a('coil_Tin')}[{k}] = {T_sup}",
+                   f"{a('coil_UA')}[{k}] = {p}[{P.UA}]")
+            return None, f"{a('coil_Tout')}[{k}]"
         up = c.signal(inst, "upper", "1", "input", "solar three-way valve: 1 = upper coil, 0 = lower coil "
                                                      "(the rules write it unless driven from outside)")
         side = c.var("upper")
         c.emit("hydraulics",
                f"{side} = {up} > 0.5",
-               f"{st}_coil_m[{k}] = 0.0 if {side} else {m}",
-               f"{st}_coil_m[{k_up}] = {m} if {side} else 0.0",
-               f"{st}_coil_Tin[{k}] = {T_sup}",
-               f"{st}_coil_Tin[{k_up}] = {T_sup}",
-               f"{st}_coil_UA[{k}] = {p}[{P.UA}]",
-               f"{st}_coil_UA[{k_up}] = {p}[{P.UA_upper}]")
-        return side, f"({st}_coil_Tout[{k_up}] if {side} else {st}_coil_Tout[{k}])"
+               f"{a('coil_m')}[{k}] = 0.0 if {side} else {m}",
+               f"{a('coil_m')}[{k_up}] = {m} if {side} else 0.0",
+               f"{a('coil_Tin')}[{k}] = {T_sup}",
+               f"{a('coil_Tin')}[{k_up}] = {T_sup}",
+               f"{a('coil_UA')}[{k}] = {p}[{P.UA}]",
+               f"{a('coil_UA')}[{k_up}] = {p}[{P.UA_upper}]")
+        return side, f"({a('coil_Tout')}[{k_up}] if {side} else {a('coil_Tout')}[{k}])"
 
     def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side):
         """Output signals and ledger entries; with the valve, the upper coil's own heat."""
@@ -327,9 +328,11 @@ class Kind(ComponentKind):
         o = inst.options
         for side in ("upper", "lower") if valve else ("",):
             top, bottom = (f"{k}.{side}" if side else k for k in ("top", "bottom"))
-            t, b = o.get(top, o["top"]), o.get(bottom, o["bottom"])
+            t, b = (o[k][side] if side and _valve(o[k]) else o[k] for k in ("top", "bottom"))
+            # a plain height beside a valve is named top.upper at the table's line, as before
+            where = inst.at(top) if side and not _valve(o["top"]) else inst.at("top") + top[3:]
             if is_number(t) and is_number(b) and t < b:
-                c.problems.append(f"{inst.at(top)} = {t}: must be above {bottom} = {b}")
+                c.problems.append(f"{where} = {t}: must be above {bottom} = {b}")
         ua_up = inst.params.UA_upper
         if valve and not ua_up > 0.0:
             c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: two coils need the upper coil's conductance "
@@ -339,5 +342,10 @@ class Kind(ComponentKind):
                               "lower = ... } and bottom = { upper = ..., lower = ... }")
         if valve and isinstance(o["top"], dict) and is_number(o["top"].get("upper")) and is_number(o["top"].get("lower")) \
                 and o["top"]["upper"] <= o["top"]["lower"]:
-            c.problems.append(f"{inst.at('top.upper')} = {o['top']['upper']}: the upper coil's inlet must be above "
+            c.problems.append(f"{inst.at('top')}.upper = {o['top']['upper']}: the upper coil's inlet must be above "
                               f"the lower coil's, top.lower = {o['top']['lower']}")
+
+
+def _valve(port) -> bool:
+    """A port given as a three-way valve's two heights (what `c.port_layers` reads as two)."""
+    return isinstance(port, dict) and set(port) == {"upper", "lower"}
