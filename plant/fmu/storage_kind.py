@@ -75,6 +75,10 @@ class StorageFmuSpec:
     bindings: dict  # role -> (variable, unit | None); T_layer's variable holds "{i}"
     parameters: dict  # FMU variable -> (value, unit | None)
 
+    def layer(self, i: int) -> str:
+        """The FMU variable of layer i (1 = top): the T_layer binding with {i} filled in."""
+        return self.bindings["T_layer"][0].replace("{i}", str(i))
+
 
 def storage_fmu_spec(name: str, values: dict, path: Path, text: str, problems: list) -> StorageFmuSpec | None:
     """Validate the `fmu`, `bindings` and `parameters` of a storage_fmu instance."""
@@ -158,10 +162,12 @@ class Kind(ComponentKind):
         return storage_kind.Kind().stored_energy(inst, x)
 
     def emit(self, c, inst):
-        decl = c.decl
-        inst.spec = storage_fmu_spec(inst.name, inst.options, decl.path, decl.path.read_text(), c.problems)
-        inst.q_loss = storage_kind.Kind().emit_signals(c, inst)[2]
-        c.param(inst, np.zeros(1), suffix="_fmu")  # the key of the running FMU (House.reset)
+        a = inst.name
+        spec = storage_fmu_spec(a, inst.options, c.decl.path, c.decl.path.read_text(), c.problems)
+        c.values[f"{a}.layers"], _, c.values[f"{a}.Q_loss"] = storage_kind.Kind().emit_signals(c, inst)
+        # the key of the running FMU (House.reset), and the FMU outputs that overwrite signals
+        c.values[f"{a}.fmu_key"] = c.param(inst, np.zeros(1), suffix="_fmu") + "[0]"
+        c.values[f"{a}.fmu_signals"] = self._extra(a, spec)
 
     def allocate(self, c, inst, ports):
         """The FMU call, once the coupling point has said what flows in (its values)."""
@@ -172,38 +178,39 @@ class Kind(ComponentKind):
                               "ports only (no coils, draws or inlet mixing)")
             flows = ("0.0", "0.0", "0.0")
         storage_kind.Kind().allocate(c, inst, ports)
-        y, Ql = c.var("y_fmu"), inst.q_loss
+        y, Ql = c.var("y_fmu"), c.values[f"{a}.Q_loss"]
         mod = c.module(__name__)
         c.emit("storages",
                "with objmode(" + y + "='float64[:]'):",
-               f"    {y} = {mod}.step(int(p_{a}_fmu[0]), h, {flows[0]}, {flows[1]}, {flows[2]})",
-               f"{'x_' + a}[:] = {y}[:{N}]",
-               f"{a}_out_T[0] = {y}[{N}]",
+               f"    {y} = {mod}.step(int({c.values[f'{a}.fmu_key']}), h, {flows[0]}, {flows[1]}, {flows[2]})",
+               f"{c.values[f'{a}.layers']}[:] = {y}[:{N}]",
+               f"{ports.array('out_T')}[0] = {y}[{N}]",
                f"{Ql} = {y}[{N + 1}]")
-        for i_out, signal in enumerate(self._extra(inst)):
+        for i_out, signal in enumerate(c.values[f"{a}.fmu_signals"]):
             c.emit("signals", f"{c.s(signal)} = {y}[{N + 2 + i_out}]")
 
-    def _extra(self, inst):
-        b = inst.spec.bindings if inst.spec else {}
+    @staticmethod
+    def _extra(name, spec):
+        b = spec.bindings if spec else {}
         roles = [("T_top", "T_top"), ("T_bottom", "T_bot"),
                  *((f"T_sensor_{i}", f"T_sensor_{i}") for i in range(1, 11))]
-        return [f"{inst.name}.{sig}" for role, sig in roles if role in b]
+        return [f"{name}.{sig}" for role, sig in roles if role in b]
 
     def start(self, inst, x, p):
         """Instantiate the FMU at time 0, register it, take its layer temperatures as the state."""
         from .component import FmuComponent
 
-        b, N = inst.spec.bindings, inst.params.n_layers
+        spec = _spec_at_start(inst)
+        b, N = spec.bindings, inst.params.n_layers
         inputs = {r: (b[r][0], STORAGE_ROLES[r][1], b[r][1]) for r in ("m_flow", "T_in_top", "T_in_bottom")}
-        var, unit = b["T_layer"]
-        outputs = {f"T_layer_{i}": (var.replace("{i}", str(i)), "degC", unit) for i in range(1, N + 1)}
+        outputs = {f"T_layer_{i}": (spec.layer(i), "degC", b["T_layer"][1]) for i in range(1, N + 1)}
         outputs["T_out"] = (b["T_out"][0], "degC", b["T_out"][1])
         outputs["Q_loss"] = (b["Q_loss"][0], "W", b["Q_loss"][1])
         for role in ("T_top", "T_bottom", *(f"T_sensor_{i}" for i in range(1, 11))):
             if role in b:
                 outputs[role] = (b[role][0], "degC", b[role][1])
-        comp = FmuComponent(inst.spec.path, inputs=inputs, outputs=outputs,
-                            parameters=inst.spec.parameters, start_time=0.0)
+        comp = FmuComponent(spec.path, inputs=inputs, outputs=outputs,
+                            parameters=spec.parameters, start_time=0.0)
         y = comp.read_outputs()
         x[:] = y[:N]
         key = next(_KEYS)
@@ -215,3 +222,9 @@ class Kind(ComponentKind):
         run = _RUNNING.pop(key, None)
         if run is not None:
             run.comp.close()
+
+
+def _spec_at_start(inst) -> StorageFmuSpec:
+    """The spec the compiler checked, built again from the instance's links when the house starts
+    the FMU (the compiler reported its problems; the house file is the one its `where` names)."""
+    return storage_fmu_spec(inst.name, inst.options, Path(inst.where.partition(":")[0]), "", [])
