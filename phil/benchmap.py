@@ -21,7 +21,6 @@ Loading reports every problem at once as one DeviceMapError, each line
 """
 from __future__ import annotations
 
-import difflib
 import math
 import tomllib
 from dataclasses import dataclass
@@ -29,7 +28,7 @@ from pathlib import Path
 
 from gateway.maps.lint import lint_map
 from gateway.maps.model import DeviceMap, build_map
-from plant.errors import DeviceMapError
+from plant.errors import DeviceMapError, closest
 
 #: Where the shipped bench maps live.
 MAPS_DIR = Path(__file__).resolve().parent / "maps"
@@ -71,7 +70,7 @@ class BenchMap:
         for i in self.interfaces:
             if i.name == name:
                 return i
-        close = difflib.get_close_matches(name, [i.name for i in self.interfaces], n=3)
+        close = closest(name, [i.name for i in self.interfaces], n=3)
         raise DeviceMapError(f"{self.dmap.path}: no interface {name!r}; closest: {', '.join(close) or 'none'}")
 
 
@@ -147,7 +146,7 @@ def _interface(path: Path, raw: dict, extra: dict, problems: list[str]) -> Inter
         problems.append(f"{where}: missing key 'direction'; add direction = 'to_bench' (a set-point) "
                         "or 'from_bench' (a measurement)")
     elif direction not in DIRECTIONS:
-        close = difflib.get_close_matches(str(direction), DIRECTIONS, n=1)
+        close = closest(str(direction), DIRECTIONS, n=1)
         problems.append(f"{where} direction = {direction!r}: must be one of {', '.join(DIRECTIONS)}"
                         + (f" (closest: {close[0]})" if close else ""))
     if direction == "from_bench" and access != "R":

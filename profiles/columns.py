@@ -21,7 +21,7 @@ from __future__ import annotations
 import tomllib
 from pathlib import Path
 
-from plant.errors import ConfigError
+from plant.errors import ConfigError, closest
 
 COLUMNS_FILE = "columns.toml"
 
@@ -67,9 +67,7 @@ def column_entries(doc: dict, path) -> tuple[dict, dict, dict]:
             continue
         for key in entry:
             if key not in COLUMN_KEYS:
-                from difflib import get_close_matches
-
-                close = get_close_matches(key, COLUMN_KEYS, n=2)
+                close = closest(key, COLUMN_KEYS, n=2)
                 problems.append(f"{where} {key}: unknown key; " + (f"did you mean {', '.join(close)}?" if close
                                                                   else f"allowed: {', '.join(COLUMN_KEYS)}"))
         signals[col] = entry["signal"]

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from plant.errors import ConfigError, DataError
+from plant.errors import ConfigError, DataError, closest
 
 from .columns import COLUMNS_FILE, column_entries, read_columns, storage_ports
 
@@ -177,9 +177,7 @@ def read_recording(path: str | Path, columns: str | Path | None = None) -> Recor
     tcol = str(doc.get("recording", {}).get("time", "time"))
     header, data, dropped, cells = _read_csv(f, text_column=tcol)
     if tcol not in header:
-        from difflib import get_close_matches
-
-        close = get_close_matches(tcol, header, n=3, cutoff=0.5)
+        close = closest(tcol, header, n=3, cutoff=0.5)
         raise DataError(f"{f}: needs a {tcol!r} column (seconds since [recording] start, or ISO date-times"
                         + ("; another name: [recording] time = \"column\" in the columns file" if tcol == "time" else "")
                         + ")" + (f"; did you mean {', '.join(close)}?" if close else "")

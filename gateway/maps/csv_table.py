@@ -10,14 +10,13 @@ cell syntax included, is reported at once as one DeviceMapError, each line
 from __future__ import annotations
 
 import csv
-import difflib
 import re
 from pathlib import Path
 from typing import Any
 
 from gateway.maps.export import BINDINGS, COLUMNS, DERIVED, RANGE_SEP
 from gateway.maps.model import TYPES, WORDS, DeviceMap, build_map
-from plant.errors import DeviceMapError
+from plant.errors import DeviceMapError, closest
 
 #: Device-block keys and how their cells read: one value (str/int/float) or several (ints/strs).
 KEYS = {
@@ -121,7 +120,7 @@ def _device_row(path: Path, line: int, cells: list[str], doc: dict, key_lines: d
     family = next((f for f in FAMILIES if key.startswith(f) and len(key) > len(f)), None)
     if key not in KEYS and family is None:
         known = list(KEYS) + [f + "..." for f in FAMILIES]
-        close = difflib.get_close_matches(key, known, n=2)
+        close = closest(key, known, n=2)
         problems.append(f"{where}: unknown device key; closest: {', '.join(close) or 'none'} "
                         "(the keys are listed in devices/README.md)")
         return
@@ -137,7 +136,7 @@ def _device_row(path: Path, line: int, cells: list[str], doc: dict, key_lines: d
             problems.append(f"{where}: {rest!r} is not a number; write e.g. {family}0")
             return
         if must == "type" and rest not in TYPES:
-            close = difflib.get_close_matches(rest, TYPES, n=1)
+            close = closest(rest, TYPES, n=1)
             problems.append(f"{where}: {rest!r} is not a point type; use one of {', '.join(TYPES)}"
                             + (f" (closest: {close[0]})" if close else ""))
             return
@@ -175,7 +174,7 @@ def _header(path: Path, line: int, cells: list[str], problems: list[str]) -> lis
     where = f"{path}:{line} register table header"
     for i, name in enumerate(cells):
         if name not in COLUMNS:
-            close = difflib.get_close_matches(name, COLUMNS, n=2)
+            close = closest(name, COLUMNS, n=2)
             problems.append(f'{where} column "{name}": unknown column; rename it to a known one '
                             f"(closest: {', '.join(close) or 'none'}) or delete it")
         elif name in cells[:i]:
@@ -246,7 +245,7 @@ def _row(at: str, row: dict[str, str], extra: int, problems: list[str]) -> dict:
             word, _, rest = cell.partition(" ")
             field = next((f for f, w in BINDINGS.items() if w == word), None)
             if field is None or not rest.strip():
-                close = difflib.get_close_matches(word, list(BINDINGS.values()), n=1)
+                close = closest(word, list(BINDINGS.values()), n=1)
                 bad(column, f"is not '<how> <what>'; <how> is one of {', '.join(BINDINGS.values())}"
                     + (f" (closest: {close[0]})" if close else "") + ", e.g. reads boiler.T_sup")
                 raw["const"] = 0

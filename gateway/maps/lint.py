@@ -6,13 +6,12 @@ Errors make a map unusable (overlaps, unknown signals, CANopen clashes); notes a
 """
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass
 from typing import Any
 
 from gateway.maps.model import CO_AREAS, DeviceMap
 from plant import units
-from plant.errors import ConfigError
+from plant.errors import ConfigError, closest
 
 PDO_BYTES = {"bool": 1, "uint16": 2, "int16": 2, "bits16": 2, "uint32": 4, "int32": 4, "float32": 4}
 
@@ -142,4 +141,4 @@ def _same_unit(a: str, b: str) -> bool:
 
 
 def _close(name: str, names: Any) -> str:
-    return ", ".join(difflib.get_close_matches(name, list(names), n=3)) or "none close"
+    return ", ".join(closest(name, list(names), n=3)) or "none close"

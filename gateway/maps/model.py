@@ -11,13 +11,12 @@ DeviceMapError, each line shaped '<file> [point NAME]: <what is wrong>; <fix>'; 
 """
 from __future__ import annotations
 
-import difflib
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from plant.errors import ConfigError, DeviceMapError
+from plant.errors import ConfigError, DeviceMapError, closest
 from plant.units import si_unit as _si_unit
 
 #: Where shipped maps live (the repository's devices/ folder).
@@ -177,7 +176,7 @@ class DeviceMap:
         try:
             return self._by_name[name]
         except KeyError:
-            close = difflib.get_close_matches(name, self._by_name, n=3)
+            close = closest(name, self._by_name, n=3)
             raise DeviceMapError(
                 f"{self.id}: no point {name!r}; closest: {', '.join(close) or 'none'}"
             ) from None
@@ -200,7 +199,7 @@ def map_path(name: str, directory: Path | None = None) -> Path:
     path = directory / f"{name}.toml"
     if not path.exists():
         known = sorted(p.stem for p in directory.glob("*.toml"))
-        close = difflib.get_close_matches(name, known, n=3)
+        close = closest(name, known, n=3)
         raise DeviceMapError(
             f"{path}: no such device map; known: {', '.join(known)}"
             + (f" (closest: {', '.join(close)})" if close else "")
@@ -242,7 +241,7 @@ def _default_si_unit(unit: str) -> str | None:
 
 
 def _not_one_of(where: str, key: str, value: Any, allowed: tuple[str, ...]) -> str:
-    close = "".join(f" (closest: {c})" for c in difflib.get_close_matches(str(value), allowed, n=1))
+    close = "".join(f" (closest: {c})" for c in closest(str(value), allowed, n=1))
     return f"{where} {key} = {value!r}: must be one of {', '.join(allowed)}{close}"
 
 
@@ -329,7 +328,7 @@ def _point(path: Path | str, index: int, raw: dict, word_order: str, invalid: di
     name = raw.get("name", f"#{index}")
     where = f"{path} [point {name}]"
     for key in sorted(set(raw) - _POINT_KEYS):
-        close = difflib.get_close_matches(key, _POINT_KEYS, n=1)
+        close = closest(key, _POINT_KEYS, n=1)
         problems.append(f"{where}: unknown field {key!r}; did you mean {close[0] if close else '?'}")
     for key in ("name", "table", "address", "type", "ref"):
         _need(raw, key, where, problems)

@@ -1,10 +1,9 @@
 """Transport registry: protocol name → transport class, imported only when used."""
 from __future__ import annotations
 
-import difflib
 import importlib
 
-from plant.errors import TransportError
+from plant.errors import TransportError, closest
 
 #: name -> "module:Class". A new transport adds one line here (plus module, contract test, README).
 TRANSPORTS = {
@@ -17,7 +16,7 @@ TRANSPORTS = {
 def transport_class(name: str) -> type:
     """The transport class registered as `name`."""
     if name not in TRANSPORTS:
-        close = difflib.get_close_matches(name, TRANSPORTS, n=2)
+        close = closest(name, TRANSPORTS, n=2)
         raise TransportError(f"transport {name!r}: not registered; known: {', '.join(TRANSPORTS)}"
                              + (f" (closest: {', '.join(close)})" if close else ""))
     module, cls = TRANSPORTS[name].split(":")
