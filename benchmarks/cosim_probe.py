@@ -132,7 +132,7 @@ def role_helics_grid(broker_address: str, n: int, own_broker_port: int | None = 
 # ---------------------------------------------------------------- orchestration (the parent)
 
 def _free_port() -> int:
-    from gateway.federation.engine import free_port  # the adapter's: zmq binds port and port + 1
+    from district.federation.engine import free_port  # the adapter's: zmq binds port and port + 1
 
     return free_port(HOST)
 

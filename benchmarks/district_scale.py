@@ -48,8 +48,8 @@ def district_text(n: int) -> str:
 
 def child_standalone(district: str, name: str, steps: int) -> None:
     """One house stepping alone: the federate's work (recording included) without the engine."""
-    from gateway.federation.house_federate import METERS, build
-    from plant.grid.district import load_district
+    from district.declaration import load_district
+    from district.federation.house_federate import METERS, build
 
     d = load_district(district)
     rt = build(d, d.house(name), Path(district).parent / "alone", tick=d.step)
@@ -85,8 +85,8 @@ def standalone(district: Path, names: list[str], steps: int) -> dict:
 
 
 def federated(district: Path, days: float, out: Path) -> dict:
-    from gateway.federation.launch import launch
-    from plant.grid.district import load_district
+    from district.declaration import load_district
+    from district.federation.launch import launch
 
     d = load_district(district)
     t0 = time.perf_counter()

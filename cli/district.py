@@ -44,7 +44,7 @@ def register(sub) -> None:
 
 
 def list_districts(args) -> int:
-    from plant.grid.district import load_district, shipped
+    from district.declaration import load_district, shipped
 
     for name in shipped():
         d = load_district(name)
@@ -53,8 +53,8 @@ def list_districts(args) -> int:
 
 
 def run(args) -> int:
-    from gateway.federation.launch import launch
-    from plant.grid.district import load_district
+    from district.declaration import load_district
+    from district.federation.launch import launch
 
     district = load_district(args.district)
     serve = args.action == "serve"

@@ -55,7 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "failed is tried again; meanwhile its values are held and the other benches keep their pace")
     p.add_argument("--stop-file", help="the run stops (safe set-points sent) once this file exists")
     p.add_argument("--district", default="coses", help="with the grid bench: the district whose grid is "
-                   "simulated, the house at its node there (plant/districts/NAME.toml or a path)")
+                   "simulated, the house at its node there (district/districts/NAME.toml or a path)")
     p.set_defaults(func=run)
 
 

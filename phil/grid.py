@@ -4,13 +4,13 @@ draw is the lab substation's measured grid flow and return.
 
 In a district PHIL run (the issue's "for the district the grid"; docs/phil.md) the house's
 substation and storage are the lab's hardware and the grid is simulated: `GridSide` is the
-district's grid (plant/grid/network.py Grid, the district file's plant, pipes and nodes,
+district's grid (district/grid.py Grid, the district file's plant, pipes and nodes,
 unchanged) with the PHIL house at its node. Each step it publishes the supply- and return-line
 temperature at the node (the grid's, at the step's start) and the differential pressure there;
 the loop sends the supply temperature and the differential pressure to the grid emulator, and
 feeds back the measured grid flow through the lab's substation (`grid.m_flow`, kg/s) and the
 measured return from it (`grid.T_return`). Over the step the grid takes that draw as a district
-house's metered exchange (plant/grid/network.py Draw: water taken at the published supply
+house's metered exchange (district/grid.py Draw: water taken at the published supply
 temperature, given back at the measured return), so the heat the grid gives the house is
     Q_flow = m cp (T_sup published - T_return measured)
 and the grid's ledger (plant heat, pipe losses, heat to the house, stored heat) closes as in a
@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
+from district.declaration import load_district
+from district.grid import Draw, Grid, _dp
 from plant.errors import ConfigError
-from plant.grid.district import load_district
-from plant.grid.network import Draw, Grid, _dp
 from plant.water import CP
 
 #: Pa the plant's pump holds across its connection (assumed: 1 bar)

@@ -6,8 +6,8 @@ import ast
 from pathlib import Path
 
 #: the project's packages; every other top-level folder of the checkout with Python modules too
-THE_PROJECT = ("plant", "gateway", "devices", "profiles", "phil", "labsim", "rigsim", "cli", "benchmarks",
-               "tests")
+THE_PROJECT = ("plant", "gateway", "district", "devices", "profiles", "phil", "labsim", "rigsim", "cli",
+               "benchmarks", "tests")
 
 
 def project_packages(root: Path, own: str) -> set[str]:

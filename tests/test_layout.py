@@ -5,7 +5,7 @@ from pathlib import Path
 import cli
 
 ROOT = Path(cli.__file__).resolve().parent.parent
-BELOW = ("plant", "gateway", "devices", "profiles", "phil", "labsim", "rigsim")
+BELOW = ("plant", "gateway", "district", "devices", "profiles", "phil", "labsim", "rigsim")
 
 
 def _imports_of_cli(path: Path) -> list[str]:

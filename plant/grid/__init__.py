@@ -1,2 +1,2 @@
-"""The district-heating grid between the houses: plug-flow pipes (pipe.py), the network of nodes
-with its plant and the houses' substations (network.py), and the district file (district.py)."""
+"""The district-heating pipe with plug flow (pipe.py): the district's grid is made of it
+(district/grid.py) and the diagnosis replays it (plant/diagnose/pipe_line.py, pipe_recording.py)."""

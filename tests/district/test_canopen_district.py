@@ -6,7 +6,7 @@ import time
 import canopen
 import numpy as np
 
-from gateway.federation.engine import free_port
+from district.federation.engine import free_port
 from gateway.maps.loader import load_all
 from gateway.transports.can_bus import open_bus
 from gateway.transports.can_hub import CanHub

@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pytest
 
-from gateway.federation import engine
-from gateway.federation.house_federate import METERS, build, exchange
-from gateway.federation.launch import DistrictFailed, launch
-from plant.grid.district import load_district
-from plant.grid.network import Draw, Grid
+from district.declaration import load_district
+from district.federation import engine
+from district.federation.house_federate import METERS, build, exchange
+from district.federation.launch import DistrictFailed, launch
+from district.grid import Draw, Grid
 from plant.house import load_house
 from profiles.recording import read_recording
 

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from district.declaration import load_district
+from district.grid import Draw, Grid, GridSpec, PipeSpec
 from plant.errors import ConfigError
-from plant.grid.district import load_district
-from plant.grid.network import Draw, Grid, GridSpec, PipeSpec
 from plant.grid.pipe import Pipe
 from plant.water import CP, RHO
 

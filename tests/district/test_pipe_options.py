@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from plant.grid.network import Draw, Grid, GridSpec, PipeSpec
+from district.grid import Draw, Grid, GridSpec, PipeSpec
 from plant.grid.pipe import Pipe, taylor_dispersion, wall_capacity
 from plant.water import CP
 

@@ -4,7 +4,7 @@ import subprocess
 
 import numpy as np
 
-from gateway.federation.engine import free_port
+from district.federation.engine import free_port
 from profiles.recording import read_recording
 
 from tests.district.serving import serve

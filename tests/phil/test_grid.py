@@ -61,7 +61,7 @@ def test_grid_bench_follows_within_its_ramp_and_valve_limits_and_its_ledger_clos
 
 
 def test_district_house_against_the_grid_emulator(tmp_path):
-    """House 1 (SF1) at its node sf1 of the lab's district (plant/districts/coses.toml) in PHIL:
+    """House 1 (SF1) at its node sf1 of the lab's district (district/districts/coses.toml) in PHIL:
     the grid and the building are simulated, the lab's substation draws from the grid emulator
     (its own process; here extracting 10 of every 15 min). Bench heat = its grid-side meter
     (flow meter x the true spread); model heat = the grid's m_meas cp (T_sup node - T_return

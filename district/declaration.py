@@ -43,11 +43,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import ConfigError, closest
-from ..housefile import line_of, resolve, tomllib
-from .network import GridSpec, PipeSpec
+from plant.errors import ConfigError, closest
+from plant.housefile import line_of, resolve, tomllib
 
-DISTRICTS = Path(__file__).resolve().parent.parent / "districts"
+from .grid import GridSpec, PipeSpec
+
+DISTRICTS = Path(__file__).resolve().parent / "districts"
 
 KEYS = {
     "district": {"name", "description", "start", "step", "T_env", "modbus_port_base"},
@@ -131,7 +132,7 @@ class _Reader:
     def table(self, name: str, required: bool) -> dict:
         t = self.doc.get(name, {})
         if required and name not in self.doc:
-            self.problems.append(f"{self.path}: [{name}] missing; add it (see plant/grid/district.py)")
+            self.problems.append(f"{self.path}: [{name}] missing; add it (see district/declaration.py)")
         if not isinstance(t, dict):
             self.problems.append(f"{self.where(name)}: [{name}] must be a table")
             return {}

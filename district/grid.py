@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..water import CP, RHO
-from .pipe import Pipe
+from plant.grid.pipe import Pipe
+from plant.water import CP, RHO
 
 
 @dataclass(frozen=True)

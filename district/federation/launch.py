@@ -41,9 +41,9 @@ def command(district, member: str, broker: str, out: Path, days: float, serve: b
     py = [sys.executable, "-m"]
     local = ["--interface", interface] if interface else []
     if member == "grid":
-        return py + ["gateway.federation.grid_federate", "--district", str(district.path), "--broker", broker,
+        return py + ["district.federation.grid_federate", "--district", str(district.path), "--broker", broker,
                      "--out", str(out), "--days", str(days)] + local
-    cmd = py + ["gateway.federation.house_federate", "--district", str(district.path), "--house", member,
+    cmd = py + ["district.federation.house_federate", "--district", str(district.path), "--house", member,
                 "--broker", broker, "--out", str(out), "--days", str(days), "--host", host] + local
     if serve:
         cmd += ["--serve", "--speed", str(speed)]

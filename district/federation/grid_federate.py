@@ -1,7 +1,7 @@
-"""The district-heating grid as its own process: pipes, nodes and the plant (plant/grid/network.py),
+"""The district-heating grid as its own process: pipes, nodes and the plant (district/grid.py),
 fed by every house's exchange through the engine, recording as it goes.
 
-    python -m gateway.federation.grid_federate --district coses --broker tcp://127.0.0.1:23500 \
+    python -m district.federation.grid_federate --district coses --broker tcp://127.0.0.1:23500 \
         --out runs/d1 --days 7
 """
 from __future__ import annotations
@@ -13,8 +13,8 @@ import sys
 import time
 from pathlib import Path
 
+from district.grid import Draw, Grid
 from plant.errors import TwinError
-from plant.grid.network import Draw, Grid
 
 from . import engine
 from .launch import follow_launcher
@@ -104,7 +104,7 @@ def run(district, broker: str, out: Path | None, days: float, progress: bool = T
 
 
 def main(argv: list[str] | None = None) -> int:
-    from plant.grid.district import load_district
+    from district.declaration import load_district
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--district", required=True)

@@ -8,7 +8,7 @@ given back while extracting and while feeding in, and the enthalpy given back, w
 enthalpy taken (taken water x the published temperature) less the metered heat. The grid
 therefore books exactly the heat the house's ledger booked.
 
-    python -m gateway.federation.house_federate --district coses --house house2 \
+    python -m district.federation.house_federate --district coses --house house2 \
         --broker tcp://127.0.0.1:23500 --out runs/d1 --days 7 [--serve --speed 60]
 """
 from __future__ import annotations
@@ -116,7 +116,7 @@ def run(district, name: str, broker: str, out: Path | None, days: float, serve: 
 
 
 def main(argv: list[str] | None = None) -> int:
-    from plant.grid.district import load_district
+    from district.declaration import load_district
 
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--district", required=True)
