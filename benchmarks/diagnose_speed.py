@@ -1,7 +1,7 @@
 """Wall time of the full diagnosis of a 7-day recording (target < 2 min on 2 cores).
 
 Uses the shipped profiles/recordings/concealed_idle_flow/ when present, else a synthetic 7-day
-recording with an idle-CHP flow (plant/diagnose/synth.py). Ends with RESULT diagnose_seconds=<s>,
+recording with an idle-CHP flow (plant/truth/synth.py). Ends with RESULT diagnose_seconds=<s>,
 the CHP heat error before/after the fit (%) and, with the shipped recording's meta.json, the error
 of the estimated idle-CHP flow against the truth (%).
 """
@@ -13,7 +13,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from plant.diagnose import diagnose, parallel, recording_io, synth  # noqa: E402
+from plant.diagnose import diagnose, parallel, recording_io  # noqa: E402
+from plant.truth import synth  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent / "profiles" / "recordings" / "concealed_idle_flow"
 

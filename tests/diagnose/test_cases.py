@@ -10,7 +10,8 @@ import dataclasses
 
 import pytest
 
-from plant.diagnose import calibration, diagnose, fit, recording_io, synth, verdict
+from plant.diagnose import calibration, diagnose, fit, recording_io, verdict
+from plant.truth import synth
 from plant.diagnose.effects import Effect, Param, catalogue, register, REGISTRY
 from plant.truth.recording import make_recording
 

@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 
-from plant.diagnose import cut, locate, replay, requirements, synth
+from plant.diagnose import cut, locate, replay, requirements
+from plant.truth import synth
 from plant.diagnose import calibration, pipe_sensor
 from plant.diagnose.context import Context
 from plant.diagnose.pipe_sensor import scored_mask

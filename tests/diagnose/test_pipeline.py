@@ -5,7 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from plant.diagnose import pipeline, synth
+from plant.diagnose import pipeline
+from plant.truth import synth
 from tests.diagnose.test_cut_replay import CIRCUIT
 
 quiet = lambda *a: None  # noqa: E731

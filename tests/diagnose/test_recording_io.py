@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from plant.catalogue import CATALOGUE
-from plant.diagnose import recording_io, requirements, synth
+from plant.diagnose import recording_io, requirements
+from plant.truth import synth
 from plant.errors import ConfigError, DataError
 
 

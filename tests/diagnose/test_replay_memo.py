@@ -2,7 +2,8 @@
 replays run in forked processes (parallel.map_forked), and neither changes a value."""
 import numpy as np
 
-from plant.diagnose import calibration, parallel, replay, synth
+from plant.diagnose import calibration, parallel, replay
+from plant.truth import synth
 from plant.house import House
 from tests.diagnose.test_cut_replay import CIRCUIT
 

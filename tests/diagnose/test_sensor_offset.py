@@ -3,7 +3,8 @@ a tank that stratifies differently around a sensor in some states only is not an
 import numpy as np
 import pytest
 
-from plant.diagnose import fit, synth, verdict
+from plant.diagnose import fit, verdict
+from plant.truth import synth
 from plant.diagnose.context import Context
 from plant.diagnose.effects import catalogue
 from plant.diagnose.effects.sensor import CONSTANT_SHARE, STATE_SHARE

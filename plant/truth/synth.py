@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..catalogue import CATALOGUE
-from .effects.sensor import first_order
-from .recording_io import Samples, write_csv
-from .requirements import BOUNDARY, COMMANDS
+from ..diagnose.effects.sensor import first_order
+from ..diagnose.recording_io import Samples, write_csv
+from ..diagnose.requirements import BOUNDARY, COMMANDS
 
 # a lab-like sensor set (the CoSES lab measures these; chp.m_flow is concealed by default)
 LAB_SIGNALS = (
