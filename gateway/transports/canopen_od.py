@@ -106,10 +106,10 @@ def build_object_dictionary(dmap: DeviceMap) -> ObjectDictionary:
     for n in range(N_PDO):
         for kind, comm, mapping, base in (("R", 0x1400, 0x1600, 0x200), ("T", 0x1800, 0x1A00, 0x180)):
             mapped = [p for p in dmap.points if p.pdo == f"{kind}{n + 1}" and p.co_index is not None]
-            entries = [(p.co_index << 16) | ((p.co_sub or 0) << 8) | _bits(p) for p in mapped]
-            if sum(_bits(p) for p in mapped) > 64:
+            entries = [(p.co_index << 16) | ((p.co_sub or 0) << 8) | pdo_bits(p) for p in mapped]
+            if sum(pdo_bits(p) for p in mapped) > 64:
                 raise DeviceMapError(f"{dmap.path} [point {mapped[-1].name}] pdo = '{kind}{n + 1}': "
-                                     f"{sum(_bits(p) for p in mapped)} bits mapped; one CAN frame "
+                                     f"{sum(pdo_bits(p) for p in mapped)} bits mapped; one CAN frame "
                                      "holds 64; move points to another PDO")
             cob_id = base + 0x100 * n + node_id | (0 if entries else PDO_INVALID)
             # The RPDO event timer is the deadline monitor; UNSIGNED16 ms cannot hold a longer watchdog.
@@ -136,7 +136,8 @@ def build_object_dictionary(dmap: DeviceMap) -> ObjectDictionary:
     return od
 
 
-def _bits(p: Point) -> int:
+def pdo_bits(p: Point) -> int:
+    """Bits a point takes in a PDO (its CANopen type's size)."""
     return 8 if p.type == "bool" else 32 if p.type in ("uint32", "int32", "float32") else 16
 
 
