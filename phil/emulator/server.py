@@ -1,11 +1,16 @@
-"""BenchServer: one bench emulator served over Modbus TCP as its bench map describes, on its own
-real-time (or accelerated) clock.
+"""BenchServer: one bench emulator served over Modbus TCP (or as a CANopen node) as its bench map
+describes, on its own real-time (or accelerated) clock.
 
 The bus face is the gateway's: the bench map's DeviceMap, a gateway Device over the bench model
 (through a PlantPort) and the gateway's Modbus TCP transport. So writes are validated as on any
 emulated device (range -> exception 03, a measured value is read-only -> 02), the map's watchdog
 hands the set-points back to the bench's safe values when the twin falls silent, and a failing
 bench answers exception 04 (`fail()`, for tests and `twin bench --fail-at`).
+
+With `can=BUS` the same Device is the gateway's CANopen node instead (gateway/transports/
+canopen_node.py), its object dictionary and PDOs built from the bench map (phil/pdo_layout.py):
+set-points arrive in its RPDOs and go through the same validation and watchdog; its TPDOs
+carry the measurements.
 """
 from __future__ import annotations
 
@@ -16,6 +21,7 @@ from typing import Any
 from gateway.device.device import Device
 from gateway.device.plant_port import PlantPort
 from gateway.device.refusal import Refusal
+from gateway.transports.canopen_node import CanopenTransport
 from gateway.transports.modbus_tcp import ModbusTcpTransport
 from phil.benchmap import BenchMap, load_bench_map
 from phil.emulator.brine import BrineBench
@@ -24,6 +30,7 @@ from phil.emulator.model import BenchModel, read_params
 from phil.emulator.solar import SolarBench
 from phil.emulator.space_heating import SpaceHeatingBench
 from phil.emulator.tap_water import TapWaterBench
+from phil.pdo_layout import canopen_map
 from plant.errors import ConfigError
 
 MODELS: dict[str, type[BenchModel]] = {
@@ -60,25 +67,31 @@ def make_model(name: str, seed: int = 0, params: dict[str, float] | None = None)
 
 
 class BenchServer:
-    """A bench model on its own clock, served on Modbus TCP at host:port (0 = a free port)."""
+    """A bench model on its own clock, served on Modbus TCP at host:port (0 = a free port), or
+    with `can` as a CANopen node on that python-can bus ("virtual:lab", "socketcand:...")."""
 
     def __init__(self, name: str, host: str = "127.0.0.1", port: int = 0, speed: float = 1.0,
                  seed: int = 0, params: dict[str, float] | None = None,
-                 bench_map: BenchMap | None = None) -> None:
+                 bench_map: BenchMap | None = None, can: str | None = None) -> None:
         self.name = name
         self.model = make_model(name, seed, params)
         doc = read_params(name)
         self.map = bench_map or load_bench_map(doc.get("bench", {}).get("map", name))
         self.port_lock = PlantPort(self.model)
-        self.device = BenchDevice(self.map.dmap, self.port_lock)
-        self.transport = ModbusTcpTransport([self.device], host=host, port=port, idle_timeout=0)
+        if can:
+            self.map = canopen_map(self.map)
+            self.device = BenchDevice(self.map.dmap, self.port_lock)
+            self.transport = CanopenTransport([self.device], bus=can)
+        else:
+            self.device = BenchDevice(self.map.dmap, self.port_lock)
+            self.transport = ModbusTcpTransport([self.device], host=host, port=port, idle_timeout=0)
         self.speed = speed
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"bench-{name}", daemon=True)
 
     @property
     def port(self) -> int | None:
-        return self.transport.port
+        return getattr(self.transport, "port", None)
 
     def start(self) -> "BenchServer":
         self.transport.start()
