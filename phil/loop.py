@@ -1,7 +1,8 @@
 """PhilLoop: the simulated side of a house exchanging with its benches every step, in real time.
 
 One step (docs/phil.md): the PHIL house's requests become set-points (phil/wiring.py), limited
-(phil/safety.py) and written to each bench as Modbus TCP master (phil/master.py); the bench's
+(phil/safety.py) and written to each bench as Modbus TCP master (phil/master.py), as the server
+its PLC polls (phil/served.py) or as CANopen master by PDO (phil/canopen_link.py); the bench's
 measurements are read back, judged, and set as the house's live measured boundary; the house
 steps by dt; one row is recorded (profiles/recording.py: signals.csv flushed every step,
 events.csv for every rejection and the stop). The run ends at its duration, on an operator stop
@@ -19,14 +20,16 @@ from pathlib import Path
 from typing import Any
 
 from gateway.clock import PacedClock
+from gateway.transports.can_bus import parse_bus_spec
 from phil.benchmap import BenchMap, load_bench_map
+from phil.canopen_link import CanopenLink
 from phil.exports import exports
 from phil.master import BenchLink, ExchangeError
 from phil.served import ServedLink, SharedServer
 from phil.report import Tally
 from phil.safety import MeasurementGuard, SetpointLimiter
 from phil.wiring import WIRINGS
-from plant.errors import ConfigError
+from plant.errors import ConfigError, TransportError
 from plant.house import load_house
 from profiles.recording import Recorder
 
@@ -40,7 +43,7 @@ class BenchChannel:
     """Everything the loop keeps per bench."""
 
     map: BenchMap
-    link: BenchLink
+    link: BenchLink | ServedLink | CanopenLink
     limiter: SetpointLimiter
     guard: MeasurementGuard
     wiring: Any
@@ -66,6 +69,7 @@ class PhilOptions:
     retry_s: float = 1.0              # a bench whose exchange failed is tried again after this (wall s);
                                       # meanwhile its measurements are held, the others keep their pace
     served_age_s: float = 2.0         # served benches: a measurement not written this long (wall) is silent
+    pdo_age_s: float = 2.0            # CANopen benches: a measurement whose TPDO is this old (wall) is silent
     start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
                                       # the house gets there unpaced on ideal benches
     district: str = "coses"           # the grid bench: the district file whose grid is simulated
@@ -83,25 +87,38 @@ def house_file(house: str) -> str:
 
 @dataclass(frozen=True)
 class BenchAddress:
-    """Where a bench's PLC is: polled there (the twin as Modbus TCP master), or served there
-    (`serve`: the twin as the server the PLC reads set-points from and writes measurements to)."""
+    """Where a bench's PLC is: polled there (the twin as Modbus TCP master), served there
+    (`serve`: the twin as the server the PLC reads set-points from and writes measurements to),
+    or a CANopen node on the python-can bus `bus` (the twin as master, by PDO)."""
 
     host: str
     port: int
     serve: bool = False
+    bus: str = ""
 
     def __str__(self) -> str:
+        if self.bus:
+            return f"canopen:{self.bus}"
         return f"{'serve:' if self.serve else ''}{self.host}:{self.port}"
 
 
 def parse_bench(spec: str) -> tuple[str, BenchAddress]:
-    """'NAME=HOST:PORT' (poll the bench PLC) or 'NAME=serve:HOST:PORT' (serve it)."""
+    """'NAME=HOST:PORT' (poll the bench PLC), 'NAME=serve:HOST:PORT' (serve it) or
+    'NAME=canopen:BUS' (its CANopen node on a bus spec, gateway/transports/can_bus.py)."""
     name, _, address = spec.partition("=")
+    if name and address.startswith("canopen:"):
+        bus = address.removeprefix("canopen:")
+        try:
+            parse_bus_spec(bus)
+        except TransportError as exc:
+            raise ConfigError(f"--bench {spec!r}: {exc}; e.g. brine=canopen:virtual:lab") from None
+        return name, BenchAddress("", 0, bus=bus)
     serve = address.startswith("serve:")
     host, _, port = address.removeprefix("serve:").rpartition(":")
     if not name or not port.isdigit():
-        raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT (the twin polls the bench PLC) or "
-                          "NAME=serve:HOST:PORT (the PLC polls the twin), e.g. space_heating=127.0.0.1:5031")
+        raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT (the twin polls the bench PLC), "
+                          "NAME=serve:HOST:PORT (the PLC polls the twin) or NAME=canopen:BUS (its CANopen "
+                          "node), e.g. space_heating=127.0.0.1:5031")
     return name, BenchAddress(host or "127.0.0.1", int(port), serve)
 
 
@@ -121,8 +138,10 @@ class PhilLoop:
             if where.serve:
                 server = SharedServer.at(where.host, where.port)
                 servers += [server] if server not in servers else []
-                link: BenchLink | ServedLink = ServedLink(bmap, server, options.served_age_s)
+                link: BenchLink | ServedLink | CanopenLink = ServedLink(bmap, server, options.served_age_s)
                 link.device.subscribe(self._bus_event)
+            elif where.bus:
+                link = CanopenLink(bmap, where.bus, options.timeout_s, options.pdo_age_s)
             else:
                 link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
             self.channels[name] = BenchChannel(
