@@ -19,9 +19,13 @@ EXAMPLES = """examples:
   twin phil house2 --bench space_heating=127.0.0.1:5036 --typeday 1 --start 31 --hours 1 --speed 200 --step 2   # SF2
   twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200 &
   twin phil house1 --bench grid=127.0.0.1:5035 --district coses --hours 1 --speed 200 --step 2   # SF1's node of the district grid
+  twin can-hub --port 29536 &          # one CAN bus for several processes (socketcand)
+  twin bench brine --canopen socketcand:127.0.0.1:29536 --speed 200 &
+  twin phil house3 --bench brine=canopen:socketcand:127.0.0.1:29536 --typeday 1 --hours 1 --speed 200 --step 2   # by PDO
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
-  twin phil table space_heating --format md    # a bench map's register table (csv or md)
+  twin phil table space_heating --format md    # a bench map's register table (csv or md), CANopen objects and PDOs
+  twin phil eds brine --out brine.eds          # the bench's CANopen EDS (PDOs from its map)
 """
 
 
@@ -29,12 +33,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("phil", help="drive the lab's emulator benches from the simulated house (PHIL)",
                        epilog=EXAMPLES, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("house", help="house: house1 ... house5 or SF1 ... MF5 (its PHIL variant, "
-                   "plant/houses/house<N>_phil.toml) or a house file; 'lint', 'table' or 'compare'")
-    p.add_argument("bench_map", nargs="?", help="with 'table': the bench map (phil/maps/NAME.toml or a path); with 'compare': the run directory")
+                   "plant/houses/house<N>_phil.toml) or a house file; 'lint', 'table', 'eds' or 'compare'")
+    p.add_argument("bench_map", nargs="?", help="with 'table' or 'eds': the bench map (phil/maps/NAME.toml or a path); with 'compare': the run directory")
+    p.add_argument("--out", help="with 'eds': file to write (default: stdout)")
     p.add_argument("--format", choices=("csv", "md"), default="md", help="with 'table': output format")
-    p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT",
+    p.add_argument("--bench", action="append", default=[], metavar="NAME=[serve:]HOST:PORT|canopen:BUS",
                    help="a bench (its map phil/maps/NAME.toml) and its PLC's Modbus TCP address the twin "
-                   "polls, or with serve: the address where the twin serves the PLC (port 0: a free one)")
+                   "polls, or with serve: the address where the twin serves the PLC (port 0: a free one), or "
+                   "with canopen: the CAN bus of its node (virtual:NAME, socketcand:HOST:PORT[:CH], socketcan:IF)")
     p.add_argument("--speed", type=float, default=1.0, help="real time x SPEED")
     p.add_argument("--step", type=float, default=1.0, help="exchange step [s of simulated time]")
     p.add_argument("--hours", type=float, default=24.0, help="simulated hours after the warm-up")
@@ -43,13 +49,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "starts (e.g. 24 = the type day itself); reached unpaced on ideal benches")
     p.add_argument("--served-age", type=float, default=2.0, help="served benches: s (wall) after which a "
                    "measurement the PLC has not rewritten counts as silent")
+    p.add_argument("--pdo-age", type=float, default=2.0, help="CANopen benches: s (wall) after which a "
+                   "measurement whose TPDO has not come again counts as silent")
     p.add_argument("--warmup", type=float, default=600.0, help="warm-up [s simulated], not counted")
     p.add_argument("--record", help="run directory: signals.csv, events.csv, meta.json, report.json")
     p.add_argument("--stale", type=float, help="s (wall) without a good value before a measurement "
                    "counts as stale (default: the bench map's [phil] stale_s)")
     p.add_argument("--stop-after", type=float, help="s (wall) without a good value before the safe "
                    "set-points are sent and the run stops (default: the map's stop_s)")
-    p.add_argument("--timeout", type=float, default=0.5, help="Modbus request timeout [s]")
+    p.add_argument("--timeout", type=float, default=0.5, help="Modbus request timeout; CANopen: SDO "
+                   "timeout and the wait for the TPDOs after a SYNC [s]")
     p.add_argument("--retries", type=int, default=1, help="Modbus retries per request")
     p.add_argument("--retry-after", type=float, default=1.0, help="s (wall) before a bench whose exchange "
                    "failed is tried again; meanwhile its values are held and the other benches keep their pace")
@@ -82,8 +91,26 @@ def run(args: argparse.Namespace) -> int:
         from gateway.maps.export import to_csv, to_markdown
         from phil.benchmap import load_bench_map
 
-        dmap = load_bench_map(args.bench_map or "space_heating").dmap
+        from phil.pdo_layout import canopen_map
+        from plant.errors import DeviceMapError
+
+        bench = load_bench_map(args.bench_map or "space_heating")
+        try:
+            dmap = canopen_map(bench).dmap      # with each point's CANopen object and PDO
+        except DeviceMapError:
+            dmap = bench.dmap                   # too many PDOs: the Modbus table still stands
         print(to_markdown(dmap) if args.format == "md" else to_csv(dmap), end="")
+        return 0
+    if args.house == "eds":
+        import sys
+
+        from gateway.transports.canopen_od import export_eds
+        from phil.benchmap import load_bench_map
+        from phil.pdo_layout import canopen_map
+
+        if not args.bench_map:
+            raise ConfigError("twin phil eds: give the bench map, e.g. twin phil eds brine --out brine.eds")
+        export_eds(canopen_map(load_bench_map(args.bench_map)).dmap, args.out or sys.stdout)
         return 0
     benches = dict(parse_bench(spec) for spec in args.bench)
     if not benches:
@@ -92,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
         speed=args.speed, dt=args.step, hours=args.hours, typeday=args.typeday, record=args.record,
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
         stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age,
+        pdo_age_s=args.pdo_age,
         retry_s=args.retry_after, district=args.district))
     for name, address in loop.served.items():
         print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
