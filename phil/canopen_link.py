@@ -100,7 +100,7 @@ class CanopenLink:
             problems = self._mismatches()
             if problems:
                 raise ExchangeError(self.bench.id, "exception", (
-                    f"{self.where}: PDO mapping differs from {self.bench.dmap.path} ({'; '.join(problems)}); "
+                    f"{self.where}: PDOs or map version differ from {self.bench.dmap.path} ({'; '.join(problems)}); "
                     f"run the bench with this map (twin bench {self.bench.id} --canopen {self.spec}) "
                     f"or give the bench PLC the EDS of `twin phil eds {self.bench.id}`"))
             for pdo in self.layout:
@@ -118,6 +118,8 @@ class CanopenLink:
         except SdoAbortedError as exc:
             raise ExchangeError(self.bench.id, "exception",
                                 f"{self.where}: SDO abort 0x{exc.code:08X} reading its PDO configuration") from None
+        except (can.CanError, OSError) as exc:
+            raise ExchangeError(self.bench.id, "connection", f"{self.where}: cannot send SDO ({exc})") from None
         self.configured = True
 
     def _mismatches(self) -> list[str]:

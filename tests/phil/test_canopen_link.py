@@ -95,7 +95,7 @@ def test_setpoints_arrive_in_range_measurements_come_back_and_nothing_else_is_se
         == {0x180 + node, 0x280 + node}
 
 
-def test_a_bench_on_another_map_is_refused_naming_the_pdo(tmp_path):
+def test_a_bench_on_another_map_or_none_is_refused_naming_the_fix(tmp_path):
     bus = "virtual:phil-canopen-other-map"
     text = load_bench_map("space_heating").dmap.path.read_text()
     other = tmp_path / "space_heating.toml"       # the bench PLC has no inlet sensor
@@ -112,6 +112,13 @@ def test_a_bench_on_another_map_is_refused_naming_the_pdo(tmp_path):
     finally:
         link.close()
         server.stop()
+    nobody = CanopenLink(load_bench_map("space_heating"), "virtual:phil-canopen-nobody", timeout=0.1)
+    try:                                          # no node on the bus: the fix named
+        with pytest.raises(ExchangeError, match=r"timeout: node 0x31 on virtual:phil-canopen-nobody: no SDO "
+                                                r"answer .*twin bench space_heating --canopen virtual:phil-canopen-nobody"):
+            nobody.exchange({})
+    finally:
+        nobody.close()
     with pytest.raises(Exception, match="NAME=canopen:BUS"):
         parse_bench("brine=canbus:virtual:x")
     assert parse_bench("brine=canopen:virtual:lab")[1].bus == "virtual:lab"
