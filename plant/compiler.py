@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .component import Instance, is_number, pack
+from .component import Instance, SignalName, is_number, pack
 from .errors import ConfigError, did_you_mean
 from .generated import PHASES, load_module, source  # noqa: F401 (load_module: House)
 from .signals import Signal, SignalCatalogue
@@ -308,9 +308,9 @@ def _owners_of_failed(c: Context) -> set[str]:
 def _check_controller_links(c: Context, catalogue: SignalCatalogue) -> None:
     """Every controller reads signals that exist and writes inputs (with the closest names)."""
     for inst in c.instances.values():
-        for key in getattr(c.kinds[inst.kind], "SIGNAL_LINKS", ()):
+        for key, spec in c.kinds[inst.kind].LINKS.items():
             name = inst.options.get(key)
-            if isinstance(name, str) and name not in catalogue:
+            if spec.type is SignalName and isinstance(name, str) and name not in catalogue:
                 c.problems.append(f"{inst.at(key)} = {name!r}: no such signal; "
                                   + did_you_mean(name, catalogue.names, "list them with `twin signals`"))
         for table, want in (("inputs", None), ("outputs", "input")):

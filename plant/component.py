@@ -15,11 +15,11 @@ from __future__ import annotations
 import dataclasses
 from collections import namedtuple
 from dataclasses import dataclass, field, fields
-from typing import NamedTuple
 
 import numpy as np
 
 from .errors import ConfigError, did_you_mean
+from .links import REQUIRED, DataSet, Height, Link, SignalName, Valve, link, link_problem  # noqa: F401 (kinds import them here)
 
 
 def param(default, unit: str, doc: str, lo: float | None = None, hi: float | None = None):
@@ -30,34 +30,6 @@ def param(default, unit: str, doc: str, lo: float | None = None, hi: float | Non
 def is_number(value) -> bool:
     """An int or float as TOML gives them; true and false are not numbers here."""
     return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-class Link(NamedTuple):
-    """A link as a kind declares it (`link(...)`); a plain (default, meaning) pair is one too."""
-
-    default: object
-    meaning: str
-    type: type | None = None
-    range: tuple | None = None
-
-
-def link(default, meaning: str, type: type | None = None, range: tuple | None = None) -> Link:
-    """Declare a link: default (REQUIRED: must be given), meaning, and what the declaration checks
-    before the kind sees it: type=int with range=(lo, hi), or type=str with range = the allowed
-    values. A bad value is reported and replaced by the default, so the kind's code runs on."""
-    return Link(default, meaning, type, range)
-
-
-def link_problem(spec, value) -> str | None:
-    """What is wrong with a typed link's value (the message after "key = value"), or None."""
-    spec = Link(*spec)
-    if spec.type is int:
-        lo, hi = spec.range
-        if not is_number(value) or not isinstance(value, int) or not lo <= value <= hi:
-            return f"must be an integer {lo} … {hi}"
-    elif spec.type is str and value not in spec.range:
-        return f"unknown; allowed: {', '.join(spec.range)}"
-    return None
 
 
 def describe(params_cls) -> list[dict]:
@@ -144,7 +116,8 @@ def indices(declaration, name: str = ""):
     return namedtuple(name, names)(*range(len(names)))
 
 
-__all__ = ["param", "link", "Link", "link_problem", "is_number", "describe", "build_params", "pack", "index_of",
+__all__ = ["param", "link", "Link", "link_problem", "REQUIRED", "Instance", "SignalName", "DataSet", "Height",
+           "Valve", "names_instances", "is_number", "describe", "build_params", "pack", "index_of",
            "indices", "dataclass", "dataclasses"]
 
 
@@ -171,11 +144,11 @@ class Kind:
     """A component kind as the compiler sees it (plant/compiler.py): its parameters, the link
     keys a house file may give beside them, and the code it emits into the step's phases.
 
-    LINKS maps each link key to `link(default, meaning, type=..., range=...)` (or a plain
-    (default, meaning) pair); a default of REQUIRED must be given. The declaration checks a typed
-    link's value, then the instances a REFS key names, then calls `check(inst, problems)` for
-    what spans several links. A kind that carries water between others implements the protocol
-    its role needs:
+    LINKS maps each link key to `link(default, meaning, type=..., range=...)` (plant/links.py);
+    a default of REQUIRED must be given. The declaration checks each link by its type (the
+    instances it names have a role of its range), then calls `check(inst, problems)` for what
+    spans several links or lies inside a table. A kind that carries water between others
+    implements the protocol its role needs:
       generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals
       consumer   emit_consumer(c, inst, T_sup) -> (m_flow, T_return expression for `volumes`)
       emitter    emit_emitter(c, inst, m_flow, T_sup) -> T_return local
@@ -184,7 +157,6 @@ class Kind:
     name = ""
     Params = None
     LINKS: dict = {}
-    REFS: dict = {}          # link key -> role of the instance(s) it names (checked by the declaration)
     role = "component"       # generator | consumer | storage | emitter | zone | controller | ...
     ROLES: tuple = ()        # every role a kind may be named in, when more than its `role`
 
@@ -206,4 +178,6 @@ class Kind:
         return 0.0
 
 
-REQUIRED = object()
+def names_instances(spec: Link) -> bool:
+    """Whether a link names other instances (type Instance or list[Instance])."""
+    return spec.type in (Instance, list[Instance])

@@ -18,12 +18,12 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 from pathlib import Path
 
-from .component import REQUIRED, Instance, build_params, is_number, link_problem
+from .component import REQUIRED, Instance, Link, build_params, is_number, link_problem, names_instances
 from .errors import ConfigError, did_you_mean
 from .housefile import HOUSES, line_of, read, resolve  # noqa: F401 (the names house files are found by)
 HOUSE_KEYS = ("name", "description", "start", "base")
 PROFILE_KEYS = ("household_kwh_per_year", "dhw_litres_per_day", "typeday", "dhw_series")
-# link keys that name other instances, and the role the named instance must have
+# what to do instead when a link names an instance of the wrong role
 PUMP_HINT = {"emitter": "put a mixing station between it and the coupling point",
              "storage": "connect a storage through the point's storage key or a coil"}
 
@@ -168,60 +168,35 @@ def _values_and_options(name: str, kind: str, k, table: dict, where: str, path: 
         else:
             problems.append(f"{path}:{line_of(text, name, key)} [{name}] {key}: not a parameter or link "
                             f"of a {kind}; " + _hint(key, pnames + list(links), "allowed"))
-    for key, (default, meaning, *_) in links.items():
+    for key, spec in links.items():
         if key not in options:
-            if default is REQUIRED:
-                problems.append(f"{where} {key}: missing; a {kind} needs it ({meaning})")
+            if spec.default is REQUIRED:
+                problems.append(f"{where} {key}: missing; a {kind} needs it ({spec.meaning})")
                 options[key] = None
             else:
-                options[key] = default
+                options[key] = spec.default
     return values, options
 
 
 def _check_links(instances: dict, path: Path, text: str, problems: list) -> None:
-    """Every instance link names an instance of the right role, no port is used twice, every
-    generator and pumped consumer sits on a coupling point."""
+    """Every link of every instance by its type (plant/links.py), in its kind's LINKS order: the
+    instances it names exist and have a role of its range, no port is used twice; then the
+    kind's own check; then every generator and pumped consumer sits on a coupling point."""
     from .kinds import KINDS
 
     used: dict[tuple[str, str], str] = {}
     for inst in list(instances.values()):
-        _check_typed(inst, KINDS[inst.kind].LINKS, problems)
-        for key, role in KINDS[inst.kind].REFS.items():
-            if key not in inst.options or inst.options[key] is None:
+        for key, spec in KINDS[inst.kind].LINKS.items():
+            value = inst.options.get(key)
+            if value is None:
                 continue
-            v = inst.options[key]
-            names = list(v) if isinstance(v, (list, tuple)) else [v]
-            if not all(isinstance(n, str) for n in names):
-                problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {v!r}: "
-                                "expected instance name(s) (strings)")
-                inst.options[key] = None
+            if names_instances(spec):
+                _check_names(inst, key, spec, instances, used, path, text, problems)
                 continue
-            bad = False
-            keep = []
-            for n in names:
-                loc = f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {n!r}"
-                if n not in instances:
-                    problems.append(f"{loc}: no such instance; " + _hint(n, instances, "declared"))
-                    bad = True
-                    continue
-                other = KINDS[instances[n].kind]
-                if role not in other.ROLES and other.role != role:
-                    hint = PUMP_HINT.get(other.role, f"a {role} is needed here")
-                    if key == "consumers":
-                        hint = f"a {instances[n].kind} has no pump of its own: " + PUMP_HINT.get(other.role, hint)
-                    problems.append(f"{loc}: a {instances[n].kind} ({other.role}) cannot be used as {key}; {hint}")
-                    bad = True
-                    continue
-                if role in ("generator", "consumer", "emitter"):
-                    if (n, role) in used:
-                        problems.append(f"{loc}: port connected twice (also by [{used[(n, role)]}])")
-                        continue
-                    used[(n, role)] = inst.name
-                keep.append(n)
-            if isinstance(v, (list, tuple)):
-                inst.options[key] = keep  # the good names stay, so one bad name hides no other problem
-            elif bad:
-                inst.options[key] = None
+            problem = link_problem(spec, value, inst.options)
+            if problem:
+                problems.append(f"{inst.at(key)} = {value!r}: {problem}")
+                inst.options[key] = None if spec.default is REQUIRED else spec.default
         KINDS[inst.kind].check(inst, problems)
     for inst in instances.values():
         kind = KINDS[inst.kind]
@@ -234,15 +209,47 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
             problems.append(f"{inst.where}: an emitter fed by nothing; name it as a mixing station's emitter")
 
 
-def _check_typed(inst: Instance, links: dict, problems: list) -> None:
-    """Each typed link (`link(..., type=...)`) holds a value of its type; a bad one is reported
-    and replaced by its default."""
-    for key, spec in links.items():
-        value = inst.options.get(key)
-        problem = None if value is None else link_problem(spec, value)
-        if problem:
-            problems.append(f"{inst.at(key)} = {value!r}: {problem}")
-            inst.options[key] = spec[0]
+def _check_names(inst: Instance, key: str, spec: Link, instances: dict, used: dict, path: Path,
+                 text: str, problems: list) -> None:
+    """A link naming instances: each exists and has a role of the link's range; a generator's,
+    consumer's or emitter's port is named once. A bad name is dropped (a list keeps its good
+    ones, so one bad name hides no other problem; a single one becomes None)."""
+    from .kinds import KINDS
+
+    v, roles = inst.options[key], spec.range
+    names = list(v) if isinstance(v, (list, tuple)) else [v]
+    if not all(isinstance(n, str) for n in names) or (spec.type is Instance and not isinstance(v, str)):
+        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {v!r}: "
+                        "expected instance name(s) (strings)")
+        inst.options[key] = None
+        return
+    bad = False
+    keep = []
+    for n in names:
+        loc = f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {n!r}"
+        if n not in instances:
+            problems.append(f"{loc}: no such instance; " + _hint(n, instances, "declared"))
+            bad = True
+            continue
+        other = KINDS[instances[n].kind]
+        role = next((r for r in roles if r in other.ROLES or other.role == r), None)
+        if role is None:
+            hint = PUMP_HINT.get(other.role, f"a {' or '.join(roles)} is needed here")
+            if key == "consumers":
+                hint = f"a {instances[n].kind} has no pump of its own: " + PUMP_HINT.get(other.role, hint)
+            problems.append(f"{loc}: a {instances[n].kind} ({other.role}) cannot be used as {key}; {hint}")
+            bad = True
+            continue
+        if role in ("generator", "consumer", "emitter"):
+            if (n, role) in used:
+                problems.append(f"{loc}: port connected twice (also by [{used[(n, role)]}])")
+                continue
+            used[(n, role)] = inst.name
+        keep.append(n)
+    if isinstance(v, (list, tuple)):
+        inst.options[key] = keep
+    elif bad:
+        inst.options[key] = None
 
 
 def load(name_or_path: str | Path, overrides: dict | None = None) -> Declaration:

@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import indices, pack, param
+from ..component import DataSet, indices, link, pack, param
 from ..tables import interp1, interp2, read_tables
 from ..water import CP, RHO
 from .generator import ANTI_CYCLE, IDLE, LOCKED_OUT, RUN_ON, START_UP, STEADY, Generator, Mode, Outlet
@@ -209,8 +209,9 @@ class Kind(Generator):
 
     name = "boiler"
     Params = Params
-    LINKS = {"data": ("wolf_cgb14", "steady-state data set: wolf_cgb14 (CGB-14 laboratory tables, scaled by "
-                                    "P_nom) or wolf_cgb20 (the CGB-20 data sheet, P_nom = 20000)")}
+    LINKS = {"data": link("wolf_cgb14", "steady-state data set: wolf_cgb14 (CGB-14 laboratory tables, scaled by "
+                                        "P_nom) or wolf_cgb20 (the CGB-20 data sheet, P_nom = 20000)",
+                          type=DataSet, range=DATA_SETS)}
     NOUN = "boiler"
     MODES = (Mode.IDLE, Mode.START_UP, Mode.STEADY, Mode.RUN_ON, Mode.LOCKED_OUT, Mode.ANTI_CYCLE, Mode.FAULT)
     POWER = ("Q_flow", "P_fuel", "P_el")
@@ -223,10 +224,7 @@ class Kind(Generator):
     def emit_generator(self, c, inst, T_in, m_ext):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
         out = Outlet.new(c)
-        data = inst.options.get("data", "wolf_cgb14")
-        if data not in DATA_SETS:
-            c.problems.append(f"{inst.at('data')} = {data!r}: unknown data set; allowed: {', '.join(DATA_SETS)}")
-            data = "wolf_cgb14"
+        data = inst.options.get("data", "wolf_cgb14")  # one of DATA_SETS (the declaration checked it)
         tabs = ", ".join(c.table(a) for a in tables("standard" if data == "wolf_cgb14" else data))
         U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
         mod = c.module(__name__)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, is_number, pack, param
+from ..component import REQUIRED, Height, Instance, Kind as ComponentKind, indices, is_number, link, pack, param
 from ..water import CP
 
 STATES = ()
@@ -48,10 +48,10 @@ class Kind(ComponentKind):
     name = "dhw_draw"
     Params = Params
     role = "draw"
-    REFS = {"storage": "storage"}
-    LINKS = {"storage": (REQUIRED, "the storage the hot water is drawn from"),
-             "hot": (REQUIRED, "height of the hot-water outlet [m]"),
-             "cold": (REQUIRED, "height of the cold-water inlet [m]")}
+    LINKS = {"storage": link(REQUIRED, "the storage the hot water is drawn from", type=Instance,
+                             range=("storage",)),
+             "hot": link(REQUIRED, "height of the hot-water outlet [m]", type=Height),
+             "cold": link(REQUIRED, "height of the cold-water inlet [m]", type=Height)}
 
     def take(self, c, inst, m_hot_of):
         """The storage ports of the draw: m_hot_of(p, T_hot) -> (lines computing the hot-water
@@ -94,10 +94,11 @@ class CoilKind(Kind):
     exchange itself stays the storage kernel's exact segment-wise one."""
 
     name = "dhw_coil_draw"
-    LINKS = {"storage": (REQUIRED, "the storage the coil is in"),
-             "inlet": (REQUIRED, "height of the coil's cold-water inlet [m] (the lower end)"),
-             "outlet": (REQUIRED, "height of the coil's hot-water outlet [m] (the upper end)"),
-             "UA": (2000.0, "coil conductance [W/K] (area x heat-transfer coefficient)")}
+    LINKS = {"storage": link(REQUIRED, "the storage the coil is in", type=Instance, range=("storage",)),
+             "inlet": link(REQUIRED, "height of the coil's cold-water inlet [m] (the lower end)", type=Height),
+             "outlet": link(REQUIRED, "height of the coil's hot-water outlet [m] (the upper end)", type=Height),
+             # > 0 W/K, checked where the kind emits (its message names the quantity)
+             "UA": link(2000.0, "coil conductance [W/K] (area x heat-transfer coefficient)", type=float)}
 
     def emit(self, c, inst):
         p = c.param(inst, pack(inst.params))

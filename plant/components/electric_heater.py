@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Height, Instance, Kind as ComponentKind, indices, link, pack, param
 from ..water import CP, RHO
 
 
@@ -104,9 +104,9 @@ class Kind(ComponentKind):
     name = "electric_heater"
     Params = Params
     role = "heater"
-    REFS = {"storage": "storage"}
-    LINKS = {"storage": (REQUIRED, "the storage the rod is in (a native storage)"),
-             "height": (REQUIRED, "height of the rod above the storage bottom [m]")}
+    LINKS = {"storage": link(REQUIRED, "the storage the rod is in (a native storage)", type=Instance,
+                             range=("storage",)),
+             "height": link(REQUIRED, "height of the rod above the storage bottom [m]", type=Height)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, indices, param
+from ..component import REQUIRED, Instance, indices, link, param
 from ..water import CP, RHO
 from . import radiator
 from .radiator import lmtd
@@ -105,8 +105,7 @@ class Kind(radiator.Kind):
     name = "floor_heating"
     Params = Params
     role = "emitter"
-    REFS = {"zone": "zone"}
-    LINKS = {"zone": (REQUIRED, "the zone the floor heats")}
+    LINKS = {"zone": link(REQUIRED, "the zone the floor heats", type=Instance, range=("zone",))}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, indices, pack, param
+from ..component import REQUIRED, Instance, indices, link, pack, param
 from ..tables import interp2, read_tables
 from ..water import CP
 from .generator import DEFROST, IDLE, LOCKED_OUT, START_UP, STEADY, Generator, Mode, Outlet
@@ -276,8 +276,8 @@ class BrineKind(_HeatPump):
 
     name = "heat_pump_brine"
     Params = ParamsBrine
-    REFS = {"collector": "source"}
-    LINKS = {"collector": (REQUIRED, "the ground collector its brine comes from")}
+    LINKS = {"collector": link(REQUIRED, "the ground collector its brine comes from", type=Instance,
+                               range=("source",))}
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Instance, Kind as ComponentKind, indices, link, pack, param
 
 STATES = ("y", "y_integral")
 
@@ -74,8 +74,8 @@ class Kind(ComponentKind):
     name = "mixing_station"
     Params = Params
     role = "consumer"
-    REFS = {"emitter": "emitter"}
-    LINKS = {"emitter": (REQUIRED, "the emitter the station feeds (a radiator or floor heating)")}
+    LINKS = {"emitter": link(REQUIRED, "the emitter the station feeds (a radiator or floor heating)",
+                             type=Instance, range=("emitter",))}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Instance, Kind as ComponentKind, indices, link, param
 from ..water import CP, RHO
 from . import zone as zone_kind
 
@@ -81,8 +81,7 @@ class Kind(ComponentKind):
     name = "radiator"
     Params = Params
     role = "emitter"
-    REFS = {"zone": "zone"}
-    LINKS = {"zone": (REQUIRED, "the zone the radiators heat")}
+    LINKS = {"zone": link(REQUIRED, "the zone the radiators heat", type=Instance, range=("zone",))}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

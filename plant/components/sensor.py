@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, SignalName, indices, link, pack, param
 
 
 @dataclass(frozen=True)
@@ -64,16 +64,11 @@ class Kind(ComponentKind):
     name = "sensor"
     Params = Params
     role = "sensor"
-    SIGNAL_LINKS = ("signal", "stagnant_flow")
-    LINKS = {"signal": (REQUIRED, "the signal the sensor reports"),
-             "stagnant_flow": (None, "a flow signal: below stagnant_below the pipe stands still")}
+    LINKS = {"signal": link(REQUIRED, "the signal the sensor reports", type=SignalName),
+             "stagnant_flow": link(None, "a flow signal: below stagnant_below the pipe stands still", type=SignalName)}
 
     def emit(self, c, inst):
         sig, flow = inst.options["signal"], inst.options["stagnant_flow"]
-        for key, v in (("signal", sig), ("stagnant_flow", flow)):
-            if v is not None and not isinstance(v, str):
-                c.problems.append(f"{inst.at(key)} = {v!r}: expected a signal name")
-                return
         x = c.state(inst, np.full(len(STATES), np.nan))
         p = c.param(inst, pack(inst.params))
         mod = c.module(__name__)

@@ -84,7 +84,8 @@ import numpy as np
 from numba import njit
 
 from .. import sun
-from ..component import REQUIRED, Kind as ComponentKind, indices, is_number, pack, param
+from ..component import (REQUIRED, Instance, Kind as ComponentKind, SignalName, Valve, indices, is_number, link, pack,
+                         param)
 from ..water import CP
 
 
@@ -205,13 +206,13 @@ class Kind(ComponentKind):
     name = "solar_collector"
     Params = Params
     role = "connection"
-    REFS = {"storage": "storage"}
-    LINKS = {"storage": (REQUIRED, "the storage the solar coil is in"),
-             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom], or { upper = ..., "
-                               "lower = ... } for two coils behind the solar valve"),
-             "bottom": (REQUIRED, "height of the coil outlet [m], or { upper = ..., lower = ... }"),
-             "sensor": (REQUIRED, "the storage temperature the pump control compares with "
-                                  "(a signal, e.g. \"dhw_storage.T_sensor_5\")")}
+    LINKS = {"storage": link(REQUIRED, "the storage the solar coil is in", type=Instance, range=("storage",)),
+             "top": link(REQUIRED, "height of the coil inlet [m above the storage bottom], or { upper = ..., "
+                                   "lower = ... } for two coils behind the solar valve", type=Valve),
+             "bottom": link(REQUIRED, "height of the coil outlet [m], or { upper = ..., lower = ... }", type=Valve),
+             "sensor": link(REQUIRED, "the storage temperature the pump control compares with "
+                                      "(a signal, e.g. \"dhw_storage.T_sensor_5\")", type=SignalName,
+                            example="{storage}.T_sensor_5")}
 
     def initial_state(self, inst):
         return initial_state(inst.params)
@@ -226,9 +227,6 @@ class Kind(ComponentKind):
         top_up, top = c.port_layers(inst, "top", st)
         bottom_up, bottom = c.port_layers(inst, "bottom", st)
         self._check_coils(c, inst, valve)
-        if not isinstance(o["sensor"], str):
-            c.problems.append(f"{inst.at('sensor')} = {o['sensor']!r}: must name a signal, e.g. "
-                              f"\"{st}.T_sensor_5\"")
         if inst.params.dT_off > inst.params.dT_on:
             c.problems.append(f"{inst.at('dT_off')} = {inst.params.dT_off}: must not exceed dT_on = "
                               f"{inst.params.dT_on} K")

@@ -64,9 +64,10 @@ class Kind(ComponentKind):
     role = "storage"
     LINKS = {"sensors": link(10, "number of temperature sensors at equally spaced heights (1 = bottom)",
                              type=int, range=(1, 100)),
-             "sensor_heights": (None, "relative heights 0 (bottom) ... 1 (top) of the sensors, sensor 1 first "
-                                      "(instead of equally spaced ones)"),
-             "sensor_lag": ({}, "sensor number = first-order time constant [s] (an effect: thermowell lag)")}
+             "sensor_heights": link(None, "relative heights 0 (bottom) ... 1 (top) of the sensors, sensor 1 "
+                                          "first (instead of equally spaced ones)", type=list),
+             "sensor_lag": link({}, "sensor number = first-order time constant [s] (an effect: thermowell lag)",
+                                type=dict)}
 
     def initial_state(self, inst):
         return storage.initial_state(inst.params)

@@ -12,17 +12,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import REQUIRED, Kind as ComponentKind
+from ..component import REQUIRED, Instance, Kind as ComponentKind, Valve, link
 
 
 class Kind(ComponentKind):
     name = "branch"
     role = "connection"
-    REFS = {"generator": "generator", "storage": "storage"}
-    LINKS = {"generator": (REQUIRED, "the generator on this branch"),
-             "storage": (REQUIRED, "the storage it charges"),
-             "supply": (REQUIRED, "height of the supply inlet [m], or { upper = ..., lower = ... }"),
-             "return": (REQUIRED, "height of the return outlet [m], or { upper = ..., lower = ... }")}
+    LINKS = {"generator": link(REQUIRED, "the generator on this branch", type=Instance, range=("generator",)),
+             "storage": link(REQUIRED, "the storage it charges", type=Instance, range=("storage",)),
+             "supply": link(REQUIRED, "height of the supply inlet [m], or { upper = ..., lower = ... }", type=Valve),
+             "return": link(REQUIRED, "height of the return outlet [m], or { upper = ..., lower = ... }",
+                            type=Valve)}
 
     def emit(self, c, inst):
         st, gen = inst.options["storage"], c.instances[inst.options["generator"]]

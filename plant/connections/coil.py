@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Height, Instance, Kind as ComponentKind, indices, link, pack, param
 
 
 @dataclass(frozen=True)
@@ -27,10 +27,9 @@ class Kind(ComponentKind):
     name = "coil"
     Params = Params
     role = "consumer"
-    REFS = {"storage": "storage"}
-    LINKS = {"storage": (REQUIRED, "the storage the coil is in"),
-             "top": (REQUIRED, "height of the coil inlet [m above the storage bottom]"),
-             "bottom": (REQUIRED, "height of the coil outlet [m]")}
+    LINKS = {"storage": link(REQUIRED, "the storage the coil is in", type=Instance, range=("storage",)),
+             "top": link(REQUIRED, "height of the coil inlet [m above the storage bottom]", type=Height),
+             "bottom": link(REQUIRED, "height of the coil outlet [m]", type=Height)}
 
     def emit_consumer(self, c, inst, T_sup):
         p = c.param(inst, pack(inst.params))

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ..component import REQUIRED, Kind as ComponentKind, is_number, link
+from ..component import REQUIRED, Height, Instance, Kind as ComponentKind, is_number, link
 from ..errors import did_you_mean
 
 
@@ -35,21 +35,26 @@ PLUME_SLOTS = 41
 class Kind(ComponentKind):
     name = "coupling_point"
     role = "connection"
-    REFS = {"generators": "generator", "consumers": "consumer", "storage": "storage",
-            "supply": "volume", "return": "volume"}
     LINKS = {"hydraulics": link("prescribed", "prescribed (ideal switch) or pressure_driven", type=str,
                                 range=("prescribed", "pressure_driven")),
-             "generators": ((), "generator instances on the point, in the order they are stepped"),
-             "consumers": ((), "consumer instances (pumped: mixing stations, coils)"),
-             "storage": (REQUIRED, "the storage that separates generators and consumers"),
-             "storage_top": (REQUIRED, "height of the storage's upper port [m]"),
-             "storage_bottom": (REQUIRED, "height of the storage's lower port [m]"),
-             "storage_inlet_mixing": (0.0, "m3 beyond the port layer over which an inflow spreads"),
-             "supply": (REQUIRED, "the supply header (a header instance)"),
-             "return": (REQUIRED, "the return header (a header instance)"),
-             "idle_flow": ({}, "generator = share of the consumers' deficit through its branch"),
-             "pump_coupling": ({}, "generator = share of the earlier generators' flow through it"),
-             "network": ({}, "pressure_driven: resistances and pump curves (plant/hydraulics/pressure_driven.py)")}
+             "generators": link((), "generator instances on the point, in the order they are stepped",
+                                type=list[Instance], range=("generator",)),
+             "consumers": link((), "consumer instances (pumped: mixing stations, coils)", type=list[Instance],
+                               range=("consumer",)),
+             "storage": link(REQUIRED, "the storage that separates generators and consumers", type=Instance,
+                             range=("storage",)),
+             "storage_top": link(REQUIRED, "height of the storage's upper port [m]", type=Height),
+             "storage_bottom": link(REQUIRED, "height of the storage's lower port [m]", type=Height),
+             # 0 ... half the storage's volume: checked where the point emits (it needs the storage)
+             "storage_inlet_mixing": link(0.0, "m3 beyond the port layer over which an inflow spreads",
+                                          type=float),
+             "supply": link(REQUIRED, "the supply header (a header instance)", type=Instance, range=("volume",)),
+             "return": link(REQUIRED, "the return header (a header instance)", type=Instance, range=("volume",)),
+             # tables: their entries are checked by check() and emit (the messages name the entry)
+             "idle_flow": link({}, "generator = share of the consumers' deficit through its branch", type=dict),
+             "pump_coupling": link({}, "generator = share of the earlier generators' flow through it", type=dict),
+             "network": link({}, "pressure_driven: resistances and pump curves (plant/hydraulics/pressure_driven.py)",
+                             type=dict)}
 
     def check(self, inst, problems):
         """A pumped branch, and shares only for the point's own generators."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..component import REQUIRED, Kind as ComponentKind, pack
+from ..component import REQUIRED, Instance, Kind as ComponentKind, link, pack
 from ..components import dhw
 
 
@@ -125,8 +125,8 @@ class SupplyKind(ComponentKind):
 
     name = "measured_supply"
     role = "connection"
-    REFS = {"emitter": "emitter"}
-    LINKS = {"emitter": (REQUIRED, "the emitter the measured supply feeds (a radiator or floor heating)")}
+    LINKS = {"emitter": link(REQUIRED, "the emitter the measured supply feeds (a radiator or floor heating)",
+                             type=Instance, range=("emitter",))}
 
     def emit(self, c, inst):
         emitter = c.instances[inst.options["emitter"]]

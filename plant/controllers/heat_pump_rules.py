@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, link, param
 from .rule_based import quantize
 
 STATES = ("valve_upper", "hp_on", "aux_on", "boiler_on", "solar_upper", "since_scan")
@@ -122,9 +122,11 @@ class Kind(ComponentKind):
               "T_collector", "T_solar")
     OUTPUTS = ("valve_upper", "hp_on", "hp_y", "aux", "boiler_U", "solar_upper")
     OPTIONAL = {"boiler_U": ("T_boiler_top", "T_boiler"), "solar_upper": ("T_collector", "T_solar")}
-    LINKS = {"inputs": (REQUIRED, "measurements: T_valve_on, T_valve_off, T_hp_on, T_hp_off (and T_boiler_top, "
-                                  "T_boiler for boiler_U; T_collector, T_solar for solar_upper) = signal names"),
-             "outputs": (REQUIRED, "commands: valve_upper, hp_on, hp_y, aux, boiler_U, solar_upper = input signal names")}
+    LINKS = {"inputs": link(REQUIRED, "measurements: T_valve_on, T_valve_off, T_hp_on, T_hp_off (and T_boiler_top, "
+                                      "T_boiler for boiler_U; T_collector, T_solar for solar_upper) = signal names",
+                            type=dict),
+             "outputs": link(REQUIRED, "commands: valve_upper, hp_on, hp_y, aux, boiler_U, solar_upper = input signal "
+                                        "names", type=dict)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

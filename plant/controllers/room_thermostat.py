@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, pack, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, link, pack, param
 
 STATES = ("integral",)
 
@@ -64,8 +64,8 @@ class Kind(ComponentKind):
     role = "controller"
     INPUTS = ("T_room", "T_room_set", "T_out")
     OUTPUTS = ("T_sup_set", "m_flow_set")
-    LINKS = {"inputs": (REQUIRED, "T_room, T_room_set, T_out = signal names"),
-             "outputs": (REQUIRED, "T_sup_set, m_flow_set = input signal names")}
+    LINKS = {"inputs": link(REQUIRED, "T_room, T_room_set, T_out = signal names", type=dict),
+             "outputs": link(REQUIRED, "T_sup_set, m_flow_set = input signal names", type=dict)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, link, param
 
 STATES = ("chp_on", "boiler_on", "dhw_on", "since_scan")
 
@@ -89,8 +89,8 @@ class Kind(ComponentKind):
     role = "controller"
     INPUTS = ("T_top", "T_bottom", "T_dhw_top")
     OUTPUTS = ("chp_on", "chp_y", "boiler_U", "dhw_on")
-    LINKS = {"inputs": (REQUIRED, "measurements: T_top, T_bottom, T_dhw_top = signal names"),
-             "outputs": (REQUIRED, "commands: chp_on, chp_y, boiler_U, dhw_on = input signal names")}
+    LINKS = {"inputs": link(REQUIRED, "measurements: T_top, T_bottom, T_dhw_top = signal names", type=dict),
+             "outputs": link(REQUIRED, "commands: chp_on, chp_y, boiler_U, dhw_on = input signal names", type=dict)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, link, param
 from .rule_based import quantize
 
 STATES = ("chp_on", "boiler_on", "since_scan", "heater_on")
@@ -105,9 +105,10 @@ class Kind(ComponentKind):
     role = "controller"
     INPUTS = ("SOC", "T_on", "T_off", "T_heater", "P_pv", "P_household")
     OUTPUTS = ("chp_on", "chp_y", "boiler_U", "heater_on", "heater_P")
-    LINKS = {"inputs": (REQUIRED, "measurements: SOC, T_on, T_off (and T_heater, P_pv, P_household for the "
-                                  "electric heater) = signal names"),
-             "outputs": (REQUIRED, "commands: chp_on, chp_y, boiler_U, heater_on, heater_P = input signal names")}
+    LINKS = {"inputs": link(REQUIRED, "measurements: SOC, T_on, T_off (and T_heater, P_pv, P_household for the "
+                                      "electric heater) = signal names", type=dict),
+             "outputs": link(REQUIRED, "commands: chp_on, chp_y, boiler_U, heater_on, heater_P = input signal names",
+                             type=dict)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

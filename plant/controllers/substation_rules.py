@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Kind as ComponentKind, indices, link, param
 from .rule_based import quantize
 
 STATES = ("extracting", "feeding_in", "since_scan")
@@ -104,8 +104,10 @@ class Kind(ComponentKind):
     role = "controller"
     INPUTS = ("T_top", "T_upper")
     OUTPUTS = ("m_flow_set", "m_flow_grid_set")
-    LINKS = {"inputs": (REQUIRED, "measurements: T_top (extraction), T_upper (feed-in) = signal names"),
-             "outputs": (REQUIRED, "commands: m_flow_set, m_flow_grid_set = the substation's input signals")}
+    LINKS = {"inputs": link(REQUIRED, "measurements: T_top (extraction), T_upper (feed-in) = signal names",
+                            type=dict),
+             "outputs": link(REQUIRED, "commands: m_flow_set, m_flow_grid_set = the substation's input signals",
+                             type=dict)}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

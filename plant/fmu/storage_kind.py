@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..component import Kind as ComponentKind, is_number
+from ..component import Kind as ComponentKind, is_number, link
 from ..components import storage, storage_kind
 from ..errors import did_you_mean
 from ..housefile import line_of
@@ -150,9 +150,10 @@ class Kind(ComponentKind):
     Params = storage.Params
     role = "storage"
     runtime = True
-    LINKS = {"fmu": (None, "path of the storage FMU, relative to the house file"),
-             "bindings": (None, "role = FMU variable (m_flow, T_in_top, T_in_bottom, T_out, Q_loss, T_layer)"),
-             "parameters": ({}, "FMU parameters: name = value or { value = ..., unit = ... }"),
+    LINKS = {"fmu": link(None, "path of the storage FMU, relative to the house file", type=Path),
+             "bindings": link(None, "role = FMU variable (m_flow, T_in_top, T_in_bottom, T_out, Q_loss, T_layer)",
+                              type=dict),
+             "parameters": link({}, "FMU parameters: name = value or { value = ..., unit = ... }", type=dict),
              "sensors": storage_kind.Kind.LINKS["sensors"]}
 
     def initial_state(self, inst):
