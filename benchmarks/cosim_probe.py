@@ -13,6 +13,8 @@ and ignores). One simulated day at 60 s is 1440 exchange steps. For each engine 
 Then each engine's multi-process path on loopback, two processes that talk only through the engine:
 HELICS, a grid process holding the broker and a house process joining it by `--broker_address`;
 mosaik, a house simulator listening (`-r HOST:PORT`) and a master joining it by `connect`.
+This script is the parent of every run and holds the HELICS roles; the mosaik simulators and
+masters are benchmarks/cosim_probe_mosaik.py, which it starts the same way.
 
     python benchmarks/cosim_probe.py            # needs `pip install helics mosaik mosaik-api-v3`
 
@@ -21,7 +23,6 @@ error and the other is still measured. Loopback only; every child has a time lim
 """
 from __future__ import annotations
 
-import asyncio
 import json
 import os
 import shutil
@@ -36,6 +37,8 @@ STEPS = 1440  # one day
 HOST = "127.0.0.1"
 CHILD_TIMEOUT = 150.0  # s, per batch of processes
 SCRIPT = str(Path(__file__).resolve())
+# the mosaik side's simulators and masters: a script of their own, run as this probe's children
+MOSAIK = str(Path(__file__).resolve().with_name("cosim_probe_mosaik.py"))
 
 
 def _out(record: dict) -> None:
@@ -141,6 +144,10 @@ def _py() -> list[str]:
     return [sys.executable, SCRIPT]
 
 
+def _py_mosaik() -> list[str]:
+    return [sys.executable, MOSAIK]
+
+
 def _run_batch(commands: list[list[str]], out: Path, stdin_go: bool = False) -> dict:
     """Start processes, (optionally) release them together once all say ready, wait, collect."""
     out.write_text("")
@@ -221,7 +228,7 @@ def main() -> int:
             _report("helics", n, r, alone, results, rows)
 
         if not missing["mosaik"]:
-            r = _run_batch([_py() + ["--role", "mosaik-master", "--n", str(n)]], tmp / f"mosaik{n}.jsonl")
+            r = _run_batch([_py_mosaik() + ["--role", "mosaik-master", "--n", str(n)]], tmp / f"mosaik{n}.jsonl")
             r["processes"] = n + 2  # master + grid + houses (the master starts the simulators)
             _report("mosaik", n, r, alone, results, rows)
 
@@ -244,7 +251,7 @@ def main() -> int:
     if not missing["mosaik"]:
         port = _free_port()
         house_addr = f"{HOST}:{port}"
-        listener = [_py() + ["--role", "mosaik-sim", "--kind", "house", "--", "-r", house_addr]]
+        listener = [_py_mosaik() + ["--role", "mosaik-sim", "--kind", "house", "--", "-r", house_addr]]
         r = _run_two_mosaik(listener, house_addr, tmp / "mosaik_pair.jsonl")
         ok = _pair_ok(r)
         print(f"  mosaik: house simulator listening with -r {house_addr}; master (grid in-process) with "
@@ -272,7 +279,8 @@ def _run_two_mosaik(listener: list[list[str]], house_addr: str, out: Path) -> di
         if _listening(port) or house.poll() is not None:
             break
         time.sleep(0.1)
-    r = _run_batch([_py() + ["--role", "mosaik-connect-master", "--house", house_addr]], out.with_suffix(".m"))
+    r = _run_batch([_py_mosaik() + ["--role", "mosaik-connect-master", "--house", house_addr]],
+                   out.with_suffix(".m"))
     try:
         _, err = house.communicate(timeout=30)
     except subprocess.TimeoutExpired:
@@ -318,121 +326,6 @@ def _report(engine: str, n: int, r: dict, alone: dict, results: dict, rows: list
     results[f"{engine}_N{n}_processes"] = r["processes"]
 
 
-# --- the mosaik side: the house and grid simulators and the masters (roles of this script's child processes)
-
-def _mosaik_classes():
-    import mosaik_api_v3
-
-    house_meta = {"api_version": "3.0", "type": "time-based",
-                  "models": {"House": {"public": True, "params": [], "attrs": ["T_top", "grid_value"]}}}
-    grid_meta = {"api_version": "3.0", "type": "time-based",
-                 "models": {"Node": {"public": True, "params": [], "attrs": ["T_top", "value"]}}}
-
-    class HouseSim(mosaik_api_v3.Simulator):
-        def __init__(self):
-            super().__init__(house_meta)
-            self.start = self.end = None
-            self.grid_value = 0.0
-
-        def init(self, sid, time_resolution=1.0, **params):
-            self.house = _house()
-            return self.meta
-
-        def create(self, num, model, **params):
-            return [{"eid": "house", "type": "House"}]
-
-        def step(self, time_, inputs, max_advance):
-            if self.start is None:
-                self.start = time.perf_counter()
-            for values in inputs.get("house", {}).get("grid_value", {}).values():
-                self.grid_value = values
-            self.house.step(STEP)
-            self.end = time.perf_counter()
-            return time_ + int(STEP)
-
-        def get_data(self, outputs):
-            return {"house": {"T_top": self.house.get("storage.T_top")}}
-
-        def finalize(self):
-            _out({"role": "house", "start": self.start, "end": self.end, "last_grid_value": self.grid_value})
-
-    class GridSim(mosaik_api_v3.Simulator):
-        def __init__(self):
-            super().__init__(grid_meta)
-            self.start = self.end = None
-            self.T_top: dict[str, float] = {}
-
-        def create(self, num, model, **params):
-            first = len(self.T_top)
-            for i in range(first, first + num):
-                self.T_top[f"node{i}"] = 0.0
-            return [{"eid": f"node{i}", "type": "Node"} for i in range(first, first + num)]
-
-        def step(self, time_, inputs, max_advance):
-            if self.start is None:
-                self.start = time.perf_counter()
-            for eid, attrs in inputs.items():
-                for value in attrs.get("T_top", {}).values():
-                    self.T_top[eid] = value
-            self.end = time.perf_counter()
-            return time_ + int(STEP)
-
-        def get_data(self, outputs):
-            return {eid: {"value": _grid_answer(self.T_top[eid])} for eid in outputs}
-
-        def finalize(self):
-            _out({"role": "grid", "start": self.start, "end": self.end, "last_T_top": list(self.T_top.values())})
-
-    return HouseSim, GridSim
-
-
-def role_mosaik_sim(kind: str) -> None:
-    """A simulator process: connects to the master (`HOST:PORT`) or, with -r, listens for it."""
-    import mosaik_api_v3
-
-    HouseSim, GridSim = _mosaik_classes()
-    mosaik_api_v3.start_simulation(HouseSim() if kind == "house" else GridSim())
-
-
-async def _mosaik_district(n: int, house_starter: dict, grid_starter) -> float:
-    import mosaik
-
-    config = {"House": house_starter, "Grid": grid_starter}
-    async with mosaik.AsyncWorld(config, mosaik_config={"addr": (HOST, 0), "start_timeout": 120,
-                                                         "stop_timeout": 30},
-                                 time_resolution=1.0, skip_greetings=True,
-                                 configure_logging=False) as world:
-        # started together: each house process imports and loads while the others do
-        grid_factory, *house_factories = await asyncio.gather(
-            world.start("Grid", sim_id="grid"),
-            *(world.start("House", sim_id=f"house{i}") for i in range(n)))
-        nodes = await grid_factory.Node.create(n)
-        for i, factory in enumerate(house_factories):
-            house = (await factory.House.create(1))[0]
-            world.connect(house, nodes[i], "T_top")
-            world.connect(nodes[i], house, ("value", "grid_value"), time_shifted=True,
-                          initial_data={"value": 0.0})
-        t0 = time.perf_counter()
-        await world.run(until=int(STEPS * STEP))
-        return time.perf_counter() - t0
-
-
-def role_mosaik_master(n: int) -> None:
-    """Master for the N-house run: the grid and each house are simulator processes it starts."""
-    env = {"COSIM_PROBE_OUT": os.environ["COSIM_PROBE_OUT"]}
-    cmd = f"%(python)s {SCRIPT} --role mosaik-sim --kind {{}} -- %(addr)s"
-    asyncio.run(_mosaik_district(n, {"cmd": cmd.format("house"), "env": env},
-                                 {"cmd": cmd.format("grid"), "env": env}))
-
-
-def role_mosaik_connect_master(house_addr: str) -> None:
-    """Master of the two-process demo: the grid runs in this process, the house is joined by address."""
-    from mosaik.starters import PythonStarter
-
-    _, GridSim = _mosaik_classes()
-    asyncio.run(_mosaik_district(1, {"connect": house_addr}, PythonStarter(GridSim)))
-
-
 def _arg(name: str, default=None):
     return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
 
@@ -448,13 +341,5 @@ if __name__ == "__main__":
     elif role == "helics-grid":
         own = _arg("--own-broker")
         role_helics_grid(_arg("--broker"), int(_arg("--n")), int(own) if own else None)
-    elif role == "mosaik-sim":
-        kind = _arg("--kind")
-        sys.argv = [sys.argv[0]] + sys.argv[sys.argv.index("--") + 1:]
-        role_mosaik_sim(kind)
-    elif role == "mosaik-master":
-        role_mosaik_master(int(_arg("--n")))
-    elif role == "mosaik-connect-master":
-        role_mosaik_connect_master(_arg("--house"))
     else:
         sys.exit(f"cosim_probe: unknown role {role!r}")
