@@ -188,8 +188,8 @@ def _check_links(instances: dict, path: Path, text: str, problems: list) -> None
     for inst in list(instances.values()):
         for key, spec in KINDS[inst.kind].LINKS.items():
             value = inst.options.get(key)
-            if value is None:
-                continue
+            if value is None and (spec.default is None or spec.default is REQUIRED or names_instances(spec)):
+                continue  # not given where that is allowed, or missing and reported
             if names_instances(spec):
                 _check_names(inst, key, spec, instances, used, path, text, problems)
                 continue

@@ -31,3 +31,9 @@ def test_a_list_where_one_instance_is_named_is_reported(tmp_path):
     """Once a crash in the DHW draw's code (a list is no storage name)."""
     with pytest.raises(ConfigError, match=r"\[dhw\] storage = \['dhw_storage'\]: expected instance name\(s\) \(strings\)"):
         load_house("house1", overrides={"dhw.storage": ["dhw_storage"]})
+
+
+def test_none_is_checked_where_the_link_has_a_default_of_its_own():
+    """A Python override can give None (TOML cannot): a data set's None is no data set."""
+    with pytest.raises(ConfigError, match=r"\[boiler\] data = None: unknown data set; allowed: wolf_cgb14, wolf_cgb20"):
+        load_house("house1", overrides={"boiler.data": None})
