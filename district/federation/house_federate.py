@@ -3,10 +3,8 @@ serving its own Modbus TCP endpoint and CANopen nodes), exchanging with the grid
 
 Each exchange step: read the grid's supply and return temperature at the house's node, set them
 on the substation (the house's plant reads nothing else of the grid), step the house over the
-exchange step, and publish what the substation's meters counted over it: grid water taken and
-given back while extracting and while feeding in, and the enthalpy given back, which is the
-enthalpy taken (taken water x the published temperature) less the metered heat. The grid
-therefore books exactly the heat the house's ledger booked.
+exchange step, and publish what the substation's meters counted over it (district/member.py:
+the one coupling of a house to the grid, which the PHIL grid side uses in one process).
 
     python -m district.federation.house_federate --district coses --house house2 \
         --broker tcp://127.0.0.1:23500 --out runs/d1 --days 7 [--serve --speed 60]
@@ -20,32 +18,21 @@ import sys
 import time
 from pathlib import Path
 
+from district.member import METERS, exchange, load
 from plant.errors import TwinError
-from plant.water import CP
 
 from . import engine
 from .launch import follow_launcher
 
-METERS = ("substation.M_extracted", "substation.E_extracted", "substation.M_fed_in", "substation.E_fed_in")
-
-
-def exchange(before: list[float], after: list[float], T_sup: float, T_ret: float) -> list[float]:
-    """[M_extracted, H_extracted_back, M_fed_in, H_fed_in_back] over a step from the meters."""
-    M_e, Q_e, M_f, Q_f = (a - b for a, b in zip(after, before))
-    return [M_e, M_e * CP * T_sup - Q_e, M_f, M_f * CP * T_ret + Q_f]
+__all__ = ["METERS", "build", "exchange", "run"]
 
 
 def build(district, entry, out: Path | None, tick: float):
     """The house's Runtime: plant with the district's overrides, devices, recording, transports."""
     from gateway.clock import LockStepClock
     from gateway.runtime import Runtime
-    from plant.house import load_house
 
-    house = load_house(entry.file, start=district.start,
-                       controller="external" if entry.controller == "external" else "rule_based",
-                       overrides=entry.house_overrides())
-    for name in ("substation.T_grid_sup", "substation.T_grid_ret"):
-        house.set(name, house.get(name))  # from now on the grid's values, not the parameters
+    house = load(district, entry)      # its grid temperatures the grid's from now on
     rt = Runtime(house, clock=LockStepClock(tick),
                  record=out / entry.name if out else None, record_interval=district.step)
     return rt
