@@ -18,7 +18,8 @@ EXAMPLES = """examples:
   twin bench space_heating_floor --modbus-tcp 127.0.0.1:5036 --speed 200 &   # the bench for a floor heating
   twin phil house2 --bench space_heating=127.0.0.1:5036 --typeday 1 --start 31 --hours 1 --speed 200 --step 2   # SF2
   twin bench grid --modbus-tcp 127.0.0.1:5035 --speed 200 &
-  twin phil house1 --bench grid=127.0.0.1:5035 --district coses --hours 1 --speed 200 --step 2   # SF1's node of the district grid
+  twin phil house1 --bench grid=127.0.0.1:5035 --district coses --hours 1 --speed 200 --step 2   # SF1's node of the district grid, the other four houses simulated on it
+  twin phil house1 --bench grid=127.0.0.1:5035 --district coses --others none --hours 1 --speed 200 --step 2   # only SF1 draws
   twin can-hub --port 29536 &          # one CAN bus for several processes (socketcand)
   twin bench brine --canopen socketcand:127.0.0.1:29536 --speed 200 &
   twin phil house3 --bench brine=canopen:socketcand:127.0.0.1:29536 --typeday 1 --hours 1 --speed 200 --step 2   # by PDO
@@ -65,6 +66,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--stop-file", help="the run stops (safe set-points sent) once this file exists")
     p.add_argument("--district", default="coses", help="with the grid bench: the district whose grid is "
                    "simulated, the house at its node there (district/districts/NAME.toml or a path)")
+    p.add_argument("--others", choices=("all", "none"), default="all", help="with the grid bench: 'all' "
+                   "simulates the district's other houses drawing on the grid beside the PHIL house (default), "
+                   "'none' lets only the PHIL house draw")
     p.set_defaults(func=run)
 
 
@@ -120,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
         stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age,
         pdo_age_s=args.pdo_age,
-        retry_s=args.retry_after, district=args.district))
+        retry_s=args.retry_after, district=args.district, others=args.others))
     for name, address in loop.served.items():
         print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
               f"{loop.channels[name].map.dmap.unit_id})", flush=True)

@@ -74,6 +74,8 @@ class PhilOptions:
                                       # the house gets there unpaced on ideal benches
     district: str = "coses"           # the grid bench: the district file whose grid is simulated
                                       # (the house at its node there, phil/grid.py)
+    others: str = "all"               # the grid bench: "all" the district's other houses simulated on
+                                      # the grid, "none" only the PHIL house draws
 
 
 def house_file(house: str) -> str:
@@ -165,7 +167,8 @@ class PhilLoop:
             "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
             "typeday": options.typeday, "start_h": options.start_h,
             "benches": {n: str(a) for n, a in self.addresses.items()}, "served": self.served,
-            **({"district": options.district} if any(ch.wiring.boundary for ch in self.channels.values()) else {}),
+            **({"district": options.district, "others": options.others}
+               if any(ch.wiring.boundary for ch in self.channels.values()) else {}),
         }, interval=0.0) if options.record else None
         self.stop_reason = ""
         self.warmed = 0.0

@@ -21,9 +21,10 @@ refuses it before the run, naming what is missing: house 4 has no solar collecto
                  ground.m_flow; plant/houses/house3_phil.toml,
                  plant/components/phil_boundary.py)
   grid           (a district house) the simulated grid's supply temperature and differential
-                 pressure at the house's node -> measured grid flow and return of the lab's
-                 substation are the house's draw on the grid (grid.m_flow, grid.T_return;
-                 phil/grid.py, which `boundary` adds to the house)
+                 pressure at the house's node (the district's other houses drawing too unless
+                 --others none) -> measured grid flow and return of the lab's substation are the
+                 house's draw on the grid (grid.m_flow, grid.T_return; phil/grid.py, which
+                 `boundary` adds to the house)
 """
 from __future__ import annotations
 
@@ -157,7 +158,10 @@ def _grid_feed(house: Any, values: dict[str, float]) -> None:
 def _grid_boundary(house: Any, options: Any) -> Any:
     from phil.grid import GridSide, HouseOnGrid
 
-    return HouseOnGrid(house, GridSide(options.district, house.decl.name))
+    # the others on the PHIL house's profiles: its start and type day
+    typeday = {"profiles.typeday": options.typeday} if options.typeday else None
+    return HouseOnGrid(house, GridSide(options.district, house.decl.name, others=options.others,
+                                       start=getattr(house, "start", None), overrides=typeday))
 
 
 WIRINGS = {
@@ -192,5 +196,5 @@ WIRINGS = {
         pairs=(("STM_TGVL_Set_degC", "STM_TGVL_degC"), ("SDP_TG_Set_bar", "SDP_TG_bar")),
         heat="E_TG_kWh", model_heat="grid.Q_flow", flow="SFW_TG_l_per_min", boundary=_grid_boundary,
         signals=("grid.T_sup", "grid.T_ret", "grid.dp", "grid.m_flow", "grid.T_return", "grid.Q_flow",
-                 "grid.Q_plant")),
+                 "grid.Q_plant", "grid.m_plant")),
 }

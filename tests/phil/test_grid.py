@@ -19,7 +19,7 @@ from tests.phil.test_loop import _bench_process, _rows, _stop
 
 
 def test_grid_side_books_the_measured_draw_and_closes():
-    fine, idle = GridSide("coses", "house1"), GridSide("coses", "house1")
+    fine, idle = GridSide("coses", "house1", others="none"), GridSide("coses", "house1", others="none")
     assert fine.node == "sf1" and fine.values["grid.dp"] == DP_PLANT      # no flow, no drop
     for _ in range(900):                       # half an hour at rest: the pipes cool
         fine.grid.step(2.0, {}, {})
