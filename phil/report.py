@@ -44,6 +44,10 @@ class Tally:
         self.model_J = {b: 0.0 for b in channels}
         self.model_J_pending = {b: 0.0 for b in channels}
         self.safe_sent: dict[str, dict[str, float]] = {}
+        # what each set-point spanned over the counted run (the grid's differential pressure moves
+        # only as the district's substations open and close: its range says by how much)
+        self.sent_range = {b: {i.name: [math.inf, -math.inf] for i in ch.map.setpoints()}
+                           for b, ch in channels.items()}
         self.step_s: list[float] = []      # wall time of each counted step: exchanges + house step
         self.room: list[tuple[float, float, float]] = []           # t, T_room, T_set
         self.demand = {b: [] for b, ch in channels.items() if ch.wiring.demand}   # t, dt, demand
@@ -53,6 +57,10 @@ class Tally:
         """One counted exchange at twin time t (before its step)."""
         ch = self.channels[bench]
         self.exchange_s[bench].append(exchange_s)
+        for name, value in sent.items():
+            span = self.sent_range[bench].get(name)
+            if span is not None and not math.isnan(value):
+                span[0], span[1] = min(span[0], value), max(span[1], value)
         if measured is None:
             self.failures[bench] += 1
         for name, j in judged.items():
@@ -130,6 +138,8 @@ class Tally:
                 "heat_error_same_span_pct": _error_pct(same_kWh, model_kWh),
                 "rejected": self.rejected[bench], "failed_exchanges": self.failures[bench],
                 "setpoints_limited": dict(ch.limiter.clamped),
+                "setpoint_range": {s: {"min": lo, "max": hi, "unit": ch.map.dmap.point(s).unit}
+                                   for s, (lo, hi) in self.sent_range[bench].items() if lo <= hi},
                 "safe_sent": self.safe_sent.get(bench),
                 "exchange_ms": {"median": float(np.median(ex)) if len(ex) else None,
                                 "p99": float(np.percentile(ex, 99)) if len(ex) else None},
@@ -144,6 +154,25 @@ class Tally:
         out["lateness_ms"] = {"median": float(np.median(late)) if len(late) else None,
                               "p99": float(np.percentile(late, 99)) if len(late) else None}
         return out
+
+
+def _grid_lines(grid: dict[str, Any]) -> list[str]:
+    """The simulated grid's ledger, the heat it gave each house and its step's wall time."""
+    others = grid.get("others") or []
+    lines = [f"  grid ({grid['district']}, the house at node {grid['node']}; "
+             + (f"other houses simulated: {', '.join(others)}" if others else "no other house drawing")
+             + f"): plant {grid['plant_kWh']:.3f} kWh, pipe losses {grid['pipe_losses_kWh']:.3f} kWh, "
+             f"to the houses {grid['to_houses_kWh']:.3f} kWh, stored {grid['delta_stored_kWh']:+.3f} kWh; "
+             f"closure {grid['closure']:.1e}"]
+    houses = grid.get("houses") or {}
+    if houses:
+        lines.append("    heat from the grid (grid's book / house's meter): " + "; ".join(
+            f"{n} {h['grid_kWh']:.3f} / {h['metered_kWh']:.3f} kWh" for n, h in houses.items()))
+    cost = grid.get("step_ms") or {}
+    if cost.get("median") is not None:
+        lines.append(f"    grid side's step (other houses + grid; every step, pre-run included): median {cost['median']:.3f} ms, "
+                     f"p99 {cost['p99']:.3f} ms")
+    return lines
 
 
 def _error_pct(bench_kWh: float, model_kWh: float) -> float | None:
@@ -210,6 +239,9 @@ def format_report(report: dict[str, Any]) -> str:
         lines.append(f"  bench {bench}:")
         for s, rms in b["follow_rms"].items():
             lines.append(f"    {s:28s} RMS follow error {rms if rms is None else f'{rms:.3f}'} {b['units'][s]}")
+        if b.get("setpoint_range"):
+            lines.append("    set-points sent: " + "; ".join(f"{s} {r['min']:.6g} ... {r['max']:.6g} {r['unit']}"
+                                                         for s, r in b["setpoint_range"].items()))
         err = b["heat_error_pct"]
         lines.append(f"    heat: bench {b['heat_bench_kWh']:.4f} kWh, model {b['heat_model_kWh']:.4f} kWh"
                      + (f" ({err:+.4f} %)" if err is not None else ""))
@@ -230,9 +262,7 @@ def format_report(report: dict[str, Any]) -> str:
             lines.append(f"    safe set-points sent: {b['safe_sent']}")
     grid = report.get("grid")
     if grid:
-        lines.append(f"  grid ({grid['district']}, the house at node {grid['node']}): plant {grid['plant_kWh']:.3f} kWh, "
-                     f"pipe losses {grid['pipe_losses_kWh']:.3f} kWh, to the house {grid['to_houses_kWh']:.3f} kWh, "
-                     f"stored {grid['delta_stored_kWh']:+.3f} kWh; closure {grid['closure']:.1e}")
+        lines += _grid_lines(grid)
     lat = report["lateness_ms"]
     lines.append(f"  step lateness: median {lat['median']} ms, p99 {lat['p99']} ms; the twin's step "
                  f"(exchanges + house): median {report['step_ms']['median']} ms, p99 {report['step_ms']['p99']} ms")

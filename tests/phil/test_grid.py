@@ -9,6 +9,8 @@ import json
 import numpy as np
 import pytest
 
+from district.grid import _dp
+from phil.benchmap import load_bench_map
 from phil.emulator.server import BenchServer, make_model
 from phil.grid import DP_PLANT, GridSide
 from phil.loop import PhilLoop, PhilOptions
@@ -60,10 +62,11 @@ def test_grid_bench_follows_within_its_ramp_and_valve_limits_and_its_ledger_clos
     assert low.x["m_flow"] == pytest.approx(1.2 / 3.6 * np.sqrt(0.1), rel=1e-3)
 
 
-def test_district_house_against_the_grid_emulator(tmp_path):
-    """House 1 (SF1) at its node sf1 of the lab's district (district/districts/coses.toml) in PHIL:
-    the grid and the building are simulated, the lab's substation draws from the grid emulator
-    (its own process; here extracting 10 of every 15 min). Bench heat = its grid-side meter
+def test_district_house_alone_on_its_grid_against_the_grid_emulator(tmp_path):
+    """House 1 (SF1) at its node sf1 of the lab's district (district/districts/coses.toml) in PHIL,
+    the district's other houses not simulated (--others none): the grid and the building are
+    simulated, the lab's substation draws from the grid emulator (its own process; here
+    extracting 10 of every 15 min). Bench heat = its grid-side meter
     (flow meter x the true spread); model heat = the grid's m_meas cp (T_sup node - T_return
     measured) over the same steps. Tolerance 0.5 % (measured -0.02 ... +0.09 % in eight runs at
     200x; -0.69 % before the emulator's set-point-rate feed-forward): the node's supply moves up
@@ -73,7 +76,7 @@ def test_district_house_against_the_grid_emulator(tmp_path):
     try:
         loop = PhilLoop("house1", {"grid": ("127.0.0.1", port)},
                         PhilOptions(speed=200.0, dt=2.0, hours=0.5, typeday=1, warmup_s=300.0,
-                                    record=tmp_path / "run", district="coses"))
+                                    record=tmp_path / "run", district="coses", others="none"))
         report = loop.run()
     finally:
         [out] = _stop(proc)
@@ -88,13 +91,95 @@ def test_district_house_against_the_grid_emulator(tmp_path):
     assert b["safe_sent"] == {"STM_TGVL_Set_degC": 30.0, "SDP_TG_Set_bar": 0.0}
     grid = report["grid"]
     assert grid["district"] == "coses" and grid["node"] == "sf1" and grid["closure"] < 1e-9
+    assert grid["others"] == [] and "no other house drawing" in text
     assert "bench grid:" in text and "SDP_TG_Set_bar" in text and "node sf1" in text
     head, rows = _rows(tmp_path / "run")
+    dp = np.array([float(r[head.index("grid.dp")]) for r in rows])
+    assert dp.max() <= DP_PLANT      # only the house's own extraction: the node never above the plant
     for column in ("grid.STM_TGVL_Set_degC", "grid.SDP_TG_Set_bar", "grid.STM_TGRL_degC.used",
                    "grid.T_sup", "grid.Q_flow", "grid.dp"):
         assert column in head
     meta = json.loads((tmp_path / "run" / "meta.json").read_text())
     assert meta["district"] == "coses"
+    assert abs(json.loads(out.strip().splitlines()[-1])["ledger"]["residual"]) < 1e-3
+
+
+def _others_run(others: str, hours: float, dt: float) -> tuple[GridSide, np.ndarray]:
+    """House 1's node of coses from midnight of type day 1 (January), the PHIL house drawing
+    0.2 kg/s 10 of every 15 min, back at 45 degC: the grid side and rows (t, dp, T_sup, m_plant)."""
+    side = GridSide("coses", "house1", others=others, overrides={"profiles.typeday": 1})
+    rows = []
+    for k in range(int(hours * 3600.0 / dt)):
+        side.values["grid.m_flow"] = 0.2 if (k * dt) % 900.0 < 600.0 else 0.0
+        side.values["grid.T_return"] = 45.0
+        side.step(dt)
+        v = side.values
+        rows.append((side.grid.t, v["grid.dp"], v["grid.T_sup"], v["grid.m_plant"]))
+    return side, np.array(rows)
+
+
+def test_other_houses_draw_at_their_nodes_move_the_pressure_and_every_house_closes():
+    """The other four houses of coses simulated beside the PHIL house (district/member.py): MF5
+    at the far end feeds in from about 1:56 (its storage above 75 degC), sending water back to
+    the plant through sf1's pipe, so the node's differential pressure rises above the plant's
+    1 bar, which the PHIL house alone never does; it is the plant's head less the signed drops
+    at the whole district's flow (the first pipe carries it all). A few Pa only: DN100 at
+    0.2 kg/s (docs/phil.md). The grid books to each house exactly the heat its substation
+    metered, every house's ledger closes, and so does the grid's."""
+    side, rows = _others_run("all", 2.5, 10.0)
+    alone, rows_alone = _others_run("none", 2.5, 10.0)
+    assert sorted(side.members) == ["house2", "house3", "house4", "house5"] and not alone.members
+    t, dp, T_sup, m_plant = rows.T
+    pipe = side.grid.spec.pipes[0]
+    assert dp == pytest.approx([DP_PLANT - 2.0 * np.copysign(_dp(pipe, m), m) for m in m_plant], abs=1e-6)
+    assert m_plant.min() < -0.1 and dp.max() > DP_PLANT + 3.0        # MF5 feeding in beyond sf1
+    assert rows_alone[:, 1].max() <= DP_PLANT and rows_alone[:, 3].min() >= 0.0
+    assert dp.max() - dp.min() > 1.5 * (rows_alone[:, 1].max() - rows_alone[:, 1].min())
+    assert np.abs(T_sup - rows_alone[:, 2]).max() > 0.5                 # the others' flows reach the node
+    L, report = side.ledger(), side.report()
+    assert L["closure"] < 1e-12
+    books = report["houses"]
+    assert sum(h["grid_kWh"] for h in books.values()) == pytest.approx(L["to_houses"] / 3.6e6, rel=1e-9)
+    assert books["house5"]["grid_kWh"] < -1.0                           # fed in: heat to the grid
+    for name, h in books.items():
+        assert h["grid_kWh"] == pytest.approx(h["metered_kWh"], rel=1e-9, abs=1e-9), name
+        # closure: a fraction of the fuel, or J without fuel (house 4's heat pump: 9e-8 J)
+        assert h.get("closure", 0.0) < 1e-6, name
+
+
+def test_district_house_with_the_other_houses_against_the_grid_emulator(tmp_path):
+    """House 1 at sf1 against the grid emulator (its own process, extracting 10 of every 15 min),
+    the other four houses simulated on the grid (the default): from 1:48 of type day 1, 5 min
+    warm-up, 30 min counted at 200x, in which MF5 starts feeding in. The node's differential
+    pressure moves above and below the plant's 1 bar as the substations open and close, within
+    the bench map's range; the bench's meter agrees with the grid's heat as with the house
+    alone; the grid books each house what its meter counted and its ledger closes."""
+    proc, port = _bench_process("--param", "sub_on_s=600", "--param", "sub_off_s=300", name="grid", speed=200.0)
+    try:
+        loop = PhilLoop("house1", {"grid": ("127.0.0.1", port)},
+                        PhilOptions(speed=200.0, dt=2.0, hours=0.5, typeday=1, start_h=1.8, warmup_s=300.0,
+                                    record=tmp_path / "run", district="coses"))
+        report = loop.run()
+    finally:
+        [out] = _stop(proc)
+    text = format_report(report)
+    print(text)
+    b, grid = report["benches"]["grid"], report["grid"]
+    assert report["stop_reason"] == "end of run" and not b["rejected"]
+    assert abs(b["heat_error_same_span_pct"]) < 0.5 and b["heat_model_kWh"] > 1.0
+    assert grid["others"] == ["house2", "house3", "house4", "house5"] and grid["closure"] < 1e-9
+    for name, h in grid["houses"].items():
+        assert h["grid_kWh"] == pytest.approx(h["metered_kWh"], rel=1e-9, abs=1e-9), name
+    head, rows = _rows(tmp_path / "run")
+    counted = [r for r in rows if float(r[0]) > 1.8 * 3600.0 + 300.0]
+    dp = np.array([float(r[head.index("grid.dp")]) for r in counted])
+    m_plant = np.array([float(r[head.index("grid.m_plant")]) for r in counted])
+    assert m_plant.min() < -0.1 and dp.max() > DP_PLANT + 3.0 and dp.min() < DP_PLANT - 3.0
+    lo, hi = load_bench_map("grid").dmap.point("SDP_TG_Set_bar").range
+    assert lo <= dp.min() / 1e5 and dp.max() / 1e5 <= hi
+    sent = b["setpoint_range"]["SDP_TG_Set_bar"]
+    assert sent["max"] - sent["min"] == pytest.approx((dp.max() - dp.min()) / 1e5, rel=0.05)
+    assert "set-points sent: " in text and "other houses simulated: house2" in text
     assert abs(json.loads(out.strip().splitlines()[-1])["ledger"]["residual"]) < 1e-3
 
 
