@@ -19,17 +19,21 @@ twin and compiled the houses (Twin, preload()), so that their start-up is not co
      0.1 % for the space heating), return-temperature RMS follow error. Comparison: the space
      heating of the same house simulated alone on the same day with an ideal bench.
   3. SF3's brine and a district house's grid, both at once (each bench a process, each house a
-     process): house 3 against the heat-pump source emulator, house 1 at node sf1 of the coses
-     grid against the grid emulator, type day 1 (January) from midnight, 300 s warm-up, then
-     --boundary-hours counted at --boundary-speed with 2 s steps (the benches' default duty
-     cycles: the lab's heat pump 20 min on / 10 off, the substation extracting 20 / 10 min).
-     Heat of the bench's meter against the simulated side's over the same span (the bench's heat
-     scaled to the twin's span by the PLC's clock: phil/report.py).
+     process): house 3 against the heat-pump source emulator from midnight of type day 1
+     (January), house 1 at node sf1 of the coses grid against the grid emulator from 1:48 of
+     the same day with the district's other four houses simulated on the grid (--grid-others;
+     MF5 starts feeding in at about 1:56), 300 s warm-up, then --boundary-hours counted at
+     --boundary-speed with 2 s steps (the benches' default duty cycles: the lab's heat pump 20
+     min on / 10 off, the substation extracting 20 / 10 min). Heat of the bench's meter against
+     the simulated side's over the same span (the bench's heat scaled to the twin's span by the
+     PLC's clock: phil/report.py); the grid's differential pressure range at the node.
 Goals (issue #25): lateness p99 < 10 ms, exchange < 5 ms on loopback. Whole run < 10 min.
-Ends with RESULT phil_heat_error_pct=, phil_exchange_p99_ms=, phil_lateness_p99_ms=,
-phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (the last two over the same span).
+Ends with RESULT phil_exchange_p99_ms=, phil_lateness_p99_ms= (and for --houses), phil_heat_error_pct=,
+phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (these two over the same span) and
+phil_grid_dp_range_pa= (of the parts run).
 Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--speed 330] [--step 3]
-     [--boundary-hours 0.5] [--boundary-speed 200]
+     [--boundary-hours 0.5] [--boundary-speed 200] [--grid-others all|none]
+     [--parts realtime,day,boundary]   (a short check: --parts boundary --boundary-hours 0.1)
 The machine's load average at the start and the end is printed with the wall times.
 """
 from __future__ import annotations
@@ -237,10 +241,15 @@ def closed_loop(speed: float, step: float, tmp: Path) -> dict:
     return report
 
 
-def boundary_loops(hours: float, speed: float, tmp: Path) -> dict[str, dict]:
+#: h of type day 1 where the grid loop starts: MF5 begins feeding in during its counted half hour
+GRID_START_H = 1.8
+
+
+def boundary_loops(hours: float, speed: float, tmp: Path, others: str = "all") -> dict[str, dict]:
     """SF3 with the brine bench and house 1 on the coses grid with the grid bench, at once: the
     report of each (phil/report.py)."""
-    cases = {"brine": ("house3", ()), "grid": ("house1", ("--district", "coses"))}
+    cases = {"brine": ("house3", ()),
+             "grid": ("house1", ("--district", "coses", "--others", others, "--start", str(GRID_START_H)))}
     launched = {name: launch_bench(name, speed) for name in cases}
     benches = {name: port_of(p) for name, p in launched.items()}
     twins = {}
@@ -256,38 +265,22 @@ def boundary_loops(hours: float, speed: float, tmp: Path) -> dict[str, dict]:
     return {name: json.loads((tmp / f"{name}_run" / "report.json").read_text()) for name in cases}
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seconds", type=float, default=120.0, help="real-time part: s per run")
-    ap.add_argument("--houses", type=int, default=5, help="houses at once in the second real-time run")
-    ap.add_argument("--speed", type=float, default=330.0, help="closed loop: real time x SPEED")
-    ap.add_argument("--step", type=float, default=3.0, help="closed loop: exchange step [s simulated]")
-    ap.add_argument("--boundary-hours", type=float, default=0.5, help="brine and grid loops: counted hours")
-    ap.add_argument("--boundary-speed", type=float, default=200.0, help="brine and grid loops: real time x SPEED")
-    a = ap.parse_args()
-    t_all = time.perf_counter()
-    walls = {}
-    load = [os.getloadavg()]        # real-time figures move with the machine's load: stated with them
-    preload()
-    walls["imports and the houses' compile"] = time.perf_counter() - t_all
-    with tempfile.TemporaryDirectory(prefix="phil_loop_") as tmp:
-        rt = [realtime(1, a.seconds, Path(tmp))]
-        walls["real time, 1 house"] = time.perf_counter() - t_all - sum(walls.values())
-        rt.append(realtime(a.houses, a.seconds, Path(tmp)))
-        walls[f"real time, {a.houses} houses"] = time.perf_counter() - t_all - sum(walls.values())
-        for r in rt:
-            print(f"real time, {r['houses']} house(s) x 3 benches, 1 s steps, {a.seconds:g} s: "
-                  f"exchange median {r['exchange_median_ms']:.2f} ms, p99 {r['exchange_p99_ms']:.2f} ms "
-                  f"({r['exchanges']} exchanges; bare client, same bench: median {r['bare_median_ms']:.2f} ms, "
-                  f"p99 {r['bare_p99_ms']:.2f} ms); lateness median {r['lateness_median_ms']:.2f} ms, "
-                  f"p99 {r['lateness_p99_ms']:.2f} ms; twin's step median {r['step_median_ms']:.2f} ms = "
-                  f"{r['cycle_share_pct']:.2f} % of the 1 s cycle", flush=True)
-        day = closed_loop(a.speed, a.step, Path(tmp))
-        walls["SF1 closed loop"] = time.perf_counter() - t_all - sum(walls.values())
-        edge = boundary_loops(a.boundary_hours, a.boundary_speed, Path(tmp))
-        walls["brine and grid loops"] = time.perf_counter() - t_all - sum(walls.values())
+def print_realtime(rt: list[dict], seconds: float) -> list[str]:
+    for r in rt:
+        print(f"real time, {r['houses']} house(s) x 3 benches, 1 s steps, {seconds:g} s: "
+              f"exchange median {r['exchange_median_ms']:.2f} ms, p99 {r['exchange_p99_ms']:.2f} ms "
+              f"({r['exchanges']} exchanges; bare client, same bench: median {r['bare_median_ms']:.2f} ms, "
+              f"p99 {r['bare_p99_ms']:.2f} ms); lateness median {r['lateness_median_ms']:.2f} ms, "
+              f"p99 {r['lateness_p99_ms']:.2f} ms; twin's step median {r['step_median_ms']:.2f} ms = "
+              f"{r['cycle_share_pct']:.2f} % of the 1 s cycle", flush=True)
+    return [f"phil_exchange_p99_ms={rt[0]['exchange_p99_ms']:.3f}", f"phil_lateness_p99_ms={rt[0]['lateness_p99_ms']:.3f}",
+            f"phil_exchange_p99_ms_{rt[1]['houses']}_houses={rt[1]['exchange_p99_ms']:.3f}",
+            f"phil_lateness_p99_ms_{rt[1]['houses']}_houses={rt[1]['lateness_p99_ms']:.3f}"]
+
+
+def print_day(day: dict, speed: float, step: float) -> list[str]:
     sh = day["benches"]["space_heating"]
-    print(f"SF1 closed loop, type day 1, 24 h at {a.speed:g}x, {a.step:g} s steps: stopped: {day['stop_reason']}")
+    print(f"SF1 closed loop, type day 1, 24 h at {speed:g}x, {step:g} s steps: stopped: {day['stop_reason']}")
     for name, b in day["benches"].items():
         err = b["heat_error_pct"]
         print(f"  {name:14s} heat bench {b['heat_bench_kWh']:.3f} kWh, model {b['heat_model_kWh']:.3f} kWh "
@@ -296,26 +289,75 @@ def main() -> int:
     print(f"  comparison: the same house alone with an ideal bench used {day['alone_space_heating_kWh']:.3f} kWh "
           f"for space heating ({100 * (sh['heat_model_kWh'] / day['alone_space_heating_kWh'] - 1):+.2f} % in PHIL); "
           f"lateness p99 {day['lateness_ms']['p99']:.2f} ms at a {day['cycle_s'] * 1e3:.1f} ms cycle")
-    print(f"SF3 brine (house 3) and grid (house 1 at sf1 of coses) at once, type day 1 from midnight, "
-          f"{a.boundary_hours:g} h counted at {a.boundary_speed:g}x, 2 s steps:")
+    return [f"phil_heat_error_pct={sh['heat_error_pct']:.4f}"]
+
+
+def print_boundary(edge: dict[str, dict], hours: float, speed: float) -> list[str]:
+    grid = edge["grid"]["grid"]
+    others = ", ".join(grid["others"]) or "none"
+    print(f"SF3 brine (house 3, type day 1 from midnight) and grid (house 1 at sf1 of coses from "
+          f"{GRID_START_H:g} h, other houses simulated: {others}) at once, {hours:g} h counted at {speed:g}x, "
+          "2 s steps:")
     for name, r in edge.items():
         b = r["benches"][name]
         print(f"  {name:6s} stopped: {r['stop_reason']}; heat bench {b['heat_bench_kWh']:.3f} kWh, model "
               f"{b['heat_model_kWh']:.3f} kWh ({b['heat_error_pct']:+.3f} %; same span {b['heat_error_same_span_pct']:+.3f} %, "
               f"clock drift {b['clock_drift_s']:+.1f} s); follow RMS "
               + ", ".join(f"{k} {'n/a' if v is None else f'{v:.3f}'}" for k, v in b["follow_rms"].items())
-              + f"; lateness p99 {r['lateness_ms']['p99']:.2f} ms at a {r['cycle_s'] * 1e3:.1f} ms cycle")
+              + f"; lateness p99 {r['lateness_ms']['p99']:.2f} ms at a {r['cycle_s'] * 1e3:.1f} ms cycle; "
+              f"twin's step median {r['step_ms']['median']:.2f} ms, p99 {r['step_ms']['p99']:.2f} ms")
+    dp = edge["grid"]["benches"]["grid"]["setpoint_range"]["SDP_TG_Set_bar"]
+    dp_range_pa = (dp["max"] - dp["min"]) * 1e5
+    print(f"  grid: differential pressure sent {dp['min']:.6f} ... {dp['max']:.6f} bar ({dp_range_pa:.1f} Pa); "
+          f"grid ledger closure {grid['closure']:.1e}")
+    return [f"phil_{name}_heat_error_pct={edge[name]['benches'][name]['heat_error_same_span_pct']:.4f}"
+            for name in ("brine", "grid")] + [f"phil_grid_dp_range_pa={dp_range_pa:.2f}"]
+
+
+PARTS = ("realtime", "day", "boundary")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=120.0, help="real-time part: s per run")
+    ap.add_argument("--houses", type=int, default=5, help="houses at once in the second real-time run")
+    ap.add_argument("--speed", type=float, default=330.0, help="closed loop: real time x SPEED")
+    ap.add_argument("--step", type=float, default=3.0, help="closed loop: exchange step [s simulated]")
+    ap.add_argument("--boundary-hours", type=float, default=0.5, help="brine and grid loops: counted hours")
+    ap.add_argument("--boundary-speed", type=float, default=200.0, help="brine and grid loops: real time x SPEED")
+    ap.add_argument("--grid-others", choices=("all", "none"), default="all",
+                    help="grid loop: the district's other houses simulated on the grid (all) or not (none)")
+    ap.add_argument("--parts", default=",".join(PARTS), help="comma-separated parts to run: " + ", ".join(PARTS))
+    a = ap.parse_args()
+    parts = a.parts.split(",")
+    if set(parts) - set(PARTS):
+        ap.error(f"--parts {a.parts}: unknown {', '.join(sorted(set(parts) - set(PARTS)))}; allowed {', '.join(PARTS)}")
+    t_all = time.perf_counter()
+    walls, results = {}, []
+    load = [os.getloadavg()]        # real-time figures move with the machine's load: stated with them
+    preload()
+    walls["imports and the houses' compile"] = time.perf_counter() - t_all
+    with tempfile.TemporaryDirectory(prefix="phil_loop_") as tmp:
+        if "realtime" in parts:
+            rt = [realtime(1, a.seconds, Path(tmp))]
+            walls["real time, 1 house"] = time.perf_counter() - t_all - sum(walls.values())
+            rt.append(realtime(a.houses, a.seconds, Path(tmp)))
+            walls[f"real time, {a.houses} houses"] = time.perf_counter() - t_all - sum(walls.values())
+            results += print_realtime(rt, a.seconds)
+        if "day" in parts:
+            day = closed_loop(a.speed, a.step, Path(tmp))
+            walls["SF1 closed loop"] = time.perf_counter() - t_all - sum(walls.values())
+            results += print_day(day, a.speed, a.step)
+        if "boundary" in parts:
+            edge = boundary_loops(a.boundary_hours, a.boundary_speed, Path(tmp), a.grid_others)
+            walls["brine and grid loops"] = time.perf_counter() - t_all - sum(walls.values())
+            results += print_boundary(edge, a.boundary_hours, a.boundary_speed)
     load.append(os.getloadavg())
     print("wall time " + ", ".join(f"{k} {v:.0f} s" for k, v in walls.items())
           + f"; in all {time.perf_counter() - t_all:.0f} s; load average (1, 5, 15 min) at the start "
           + "{:.2f} {:.2f} {:.2f}, at the end {:.2f} {:.2f} {:.2f}".format(*load[0], *load[1]))
-    print(f"RESULT phil_heat_error_pct={sh['heat_error_pct']:.4f}")
-    print(f"RESULT phil_exchange_p99_ms={rt[0]['exchange_p99_ms']:.3f}")
-    print(f"RESULT phil_lateness_p99_ms={rt[0]['lateness_p99_ms']:.3f}")
-    print(f"RESULT phil_exchange_p99_ms_{a.houses}_houses={rt[1]['exchange_p99_ms']:.3f}")
-    print(f"RESULT phil_lateness_p99_ms_{a.houses}_houses={rt[1]['lateness_p99_ms']:.3f}")
-    for name in ("brine", "grid"):
-        print(f"RESULT phil_{name}_heat_error_pct={edge[name]['benches'][name]['heat_error_same_span_pct']:.4f}")
+    for line in results:
+        print(f"RESULT {line}")
     return 0
 
 
