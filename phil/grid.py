@@ -37,7 +37,7 @@ substations open and close (0.2 kg/s net through the first pipe), below the grid
 houses' flows (after a rest the pipe's standing water arrives first, then the plant's 70 degC).
 
 Cost: the other houses' steps are tens of microseconds each; the grid's step (pure Python and
-numpy over the pipes' parcels) is the cost, about 0.5-1 ms (report `grid.step_ms`).
+numpy over the pipes' parcels) is the cost, 0.3-0.8 ms median (report `grid.step_ms`).
 
 `HouseOnGrid` is the PHIL house and the grid side as one plant for the loop (get/set/step and
 the rest of the house's face): signals `grid.*` are the grid side's, all others the house's.
