@@ -223,6 +223,12 @@ def _check_names(inst: Instance, key: str, spec: Link, instances: dict, used: di
                         "expected instance name(s) (strings)")
         inst.options[key] = None
         return
+    if spec.type == list[Instance] and isinstance(v, str):
+        # a kind iterates a list link: a bare name would be read letter by letter. Reported, and
+        # checked on as the one-name list it means, so nothing else is reported for it
+        problems.append(f"{path}:{line_of(text, inst.name, key)} [{inst.name}] {key} = {v!r}: "
+                        f"a list of instance names; write {key} = [{v!r}]".replace("'", '"'))
+        inst.options[key] = [v]
     bad = False
     keep = []
     for n in names:

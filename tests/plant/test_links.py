@@ -37,3 +37,12 @@ def test_none_is_checked_where_the_link_has_a_default_of_its_own():
     """A Python override can give None (TOML cannot): a data set's None is no data set."""
     with pytest.raises(ConfigError, match=r"\[boiler\] data = None: unknown data set; allowed: wolf_cgb14, wolf_cgb20"):
         load_house("house1", overrides={"boiler.data": None})
+
+
+def test_one_name_where_a_list_of_instances_is_needed_is_reported_with_the_fix():
+    """Once read letter by letter ("its generators: b, e, i, l, o, r")."""
+    with pytest.raises(ConfigError) as err:
+        load_house("house1", overrides={"switch.generators": "boiler"})
+    msg = str(err.value)
+    assert '[switch] generators = "boiler": a list of instance names; write generators = ["boiler"]' in msg
+    assert "b, e, i" not in msg and "its generators: boiler" in msg
