@@ -37,3 +37,9 @@ try:
     numba.config.CACHE_DIR = str(_cache)  # numba may have read its config before this import
 except ImportError:  # pragma: no cover - numba is a hard dependency
     pass
+
+
+def cache_dir() -> Path:
+    """The folder of this source version's compiled plants (and of the files made beside them:
+    the cut variants a diagnosis derives)."""
+    return _cache

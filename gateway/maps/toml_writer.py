@@ -1,28 +1,8 @@
 """A DeviceMap written as devices/<id>.toml text, the form gateway.maps.model loads (used by import-table)."""
 from __future__ import annotations
 
-import json
-import re
-
 from gateway.maps.model import DeviceMap, Point
-
-_BARE = re.compile(r"^[A-Za-z0-9_-]+$")
-
-
-def _key(k: str | int) -> str:
-    return str(k) if _BARE.match(str(k)) else json.dumps(str(k), ensure_ascii=False)
-
-
-def _val(v: object) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_val(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{ " + ", ".join(f"{_key(k)} = {_val(x)}" for k, x in v.items()) + " }"
-    return json.dumps(str(v), ensure_ascii=False)   # a JSON string is a TOML basic string
+from plant.toml_text import value as _val
 
 
 def _point(dmap: DeviceMap, p: Point) -> str:

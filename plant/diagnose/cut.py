@@ -1,7 +1,8 @@
 """Which part of the house a recording lets the diagnosis replay alone: cuts and subsystems.
 
 A recording that measures the heating circuit's building side (flow, supply after mixing,
-return) and the hot water taken is replayed on the cut house `<house>_cut_circuit.toml`: the
+return) and the hot water taken is replayed on the house cut at its circuits (derive.py: the
+variant follows from the house's links; house 1's is plant/houses/house1_cut_circuit.toml): the
 generators, the hydraulic switch, both storages and the DHW coil run on the recorded commands,
 while the circuit and the tap are measured boundaries (plant/connections/measured.py). The twin's
 own building, room, weather and hot-water profiles then no longer enter the storage's energy
@@ -22,31 +23,21 @@ per subsystem.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numba import njit
 
 from ..components import mixing_station
+from ..errors import ConfigError
 from ..schedule import n_steps
 from ..water import CP, RHO
+from .derive import DerivedCut, derive
 
 
-@dataclass(frozen=True)
-class Cut:
-    name: str            # the cut house is f"{house}_cut_{name}"
-    removes: tuple       # instances of the whole house the measured boundaries replace
-    bindings: dict       # input of the cut house -> the recorded signal it follows
-    why: str
+def circuit_cut(house) -> DerivedCut:
+    """The cut a recording that measures the heating circuits and hot-water draws is replayed
+    on: `house` cut at its circuits' building side (derive.py)."""
+    return derive(house, "circuit")
 
-
-CUTS = (
-    Cut("circuit", ("mixer", "radiator", "zone", "thermostat", "dhw"),
-        {"mixer.m_flow": "mixer.m_flow", "mixer.T_sup": "mixer.T_sup", "mixer.T_return": "mixer.T_ret",
-         "dhw.m_flow_hot": "dhw.m_flow_hot"},
-        "heating circuit (measured flow, supply and return) and hot-water draw (measured) as boundaries: "
-        "the storage no longer depends on the twin's building, room, weather and DHW profiles"),
-)
 
 # the mixing station alone: recorded set-points and measured interfaces -> its outputs
 CIRCUIT_INPUTS = ("mixer.T_sup_set", "mixer.m_flow_set", "switch.T_sup", "mixer.T_ret")
@@ -69,29 +60,26 @@ def subsystem(signal: str) -> str:
 
 
 def select(rec, house: str, required: bool = False):
-    """The first cut whose recorded signals the recording holds and whose house file exists
-    (None: the whole house), and whether the mixing station can be replayed alone. required:
-    a recording that allows no cut is an error naming what each cut lacks (the whole house
-    would replay on the twin's own building and profiles)."""
-    from ..errors import ConfigError
-    from ..housefile import resolve
-
-    if required and not any(all(rec.has(s) for s in c.bindings.values()) for c in CUTS):
-        lacks = "; ".join(f"cut '{c.name}' needs {', '.join(c.bindings.values())} (missing: "
-                          f"{', '.join(s for s in c.bindings.values() if not rec.has(s))})" for c in CUTS)
-        raise ConfigError(f"{rec.source}: the columns file maps no boundary a cut can use: {lacks}. Map those "
-                          f"columns (`twin diagnose --requirements {house}` lists what each enables), or leave "
-                          "out --require-cut to replay the whole house on the twin's building and profiles")
-    for cut in CUTS:
-        if not all(rec.has(s) for s in cut.bindings.values()):
-            continue
-        try:
-            resolve(f"{house}_cut_{cut.name}")
-        except ConfigError:  # no cut file for this house: replay the whole house
-            continue
-        circuit = "mixer" in cut.removes and all(rec.has(s) for s in CIRCUIT_INPUTS)
-        return cut, circuit
-    return None, False
+    """The cut whose recorded signals the recording holds (None: the whole house), and whether
+    the mixing station can be replayed alone. required: a recording that allows no cut is an
+    error naming what the cut lacks (the whole house would replay on the twin's own building and
+    profiles)."""
+    try:
+        cut = circuit_cut(house)
+    except ConfigError as exc:
+        if required:
+            raise ConfigError(f"{rec.source}: the house cannot be cut: {exc}") from None
+        return None, False
+    lacks = cut.missing(rec.has)
+    if lacks:
+        if required:
+            raise ConfigError(f"{rec.source}: the columns file maps no boundary a cut can use: cut '{cut.name}' "
+                              f"needs {', '.join(cut.bindings.values())} (missing: {', '.join(lacks)}). Map those "
+                              f"columns (`twin diagnose --requirements {house}` lists what each enables), or leave "
+                              "out --require-cut to replay the whole house on the twin's building and profiles")
+        return None, False
+    circuit = "mixer" in cut.removes and all(rec.has(s) for s in CIRCUIT_INPUTS)
+    return cut, circuit
 
 
 def radiator_alone(rec, cut) -> bool:
@@ -99,10 +87,10 @@ def radiator_alone(rec, cut) -> bool:
     return cut is not None and "radiator" in cut.removes and all(rec.has(s) for s in RADIATOR_INPUTS + RADIATOR_OUTPUTS)
 
 
-def requirements() -> dict:
+def requirements(house="house1") -> dict:
     """What each recorded signal enables (twin diagnose --requirements)."""
     out = {}
-    for cut in CUTS:
+    for cut in (circuit_cut(house),):
         for inp, sig in cut.bindings.items():
             out.setdefault(sig, []).append(f"cut '{cut.name}' (binds {inp}; all of "
                                            f"{', '.join(cut.bindings.values())} needed)")

@@ -120,7 +120,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
 def locate_mismatch(b: Baseline) -> Location:
     ctx, rp, sim0 = b.ctx, b.replayer, b.ctx.nominal_sim
     affected = locate.mismatched_signals(ctx, sim0, ctx.held)
-    summary = {"replay": {"plant": rp.plant_name, "cut": rp.cut.name if rp.cut else None,
+    summary = {"replay": {"plant": rp.plant_label, "cut": rp.cut.name if rp.cut else None,
                           "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit},
                "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
                "windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],

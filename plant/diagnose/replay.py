@@ -98,7 +98,9 @@ class Replayer:
         self.radiator = cut_mod.radiator_alone(rec, self.cut)
         removed = set(self.cut.removes) if self.cut else set()
         self.removed = removed
-        self.plant_name = f"{house}_cut_{self.cut.name}" if self.cut else house
+        # what the replay loads (a derived cut's file) and what the report calls it
+        self.plant_name = str(self.cut.path()) if self.cut else house
+        self.plant_label = self.cut.label if self.cut else str(house)
         self.commands = [c for c in COMMANDS if c.split(".", 1)[0] not in removed]
         bound = dict(self.cut.bindings) if self.cut else {}
         self.names = self.commands + list(bound)
@@ -106,11 +108,12 @@ class Replayer:
         self.bound = bound
         self.notes: list[str] = []
         if self.cut:
-            self.notes.append(f"replayed on the cut {self.plant_name}: {self.cut.why}"
+            self.notes.append(f"replayed on the cut {self.plant_label}: {self.cut.why}"
                               + ("; the mixing station replayed alone between its measured interfaces"
                                  if self.circuit else "")
                               + ("; the radiator circuit replayed alone (measured flow, supply and room "
-                                 "-> return)" if self.radiator else ""))
+                                 "-> return)" if self.radiator else "")
+                              + f"; the cut's house file (derived from {house}): {self.plant_name}")
         self._checked = False
         # the plant's rows by (overrides, samples), shared by the replayers with_calibration makes:
         # a third of a diagnosis's drives repeat one already made (each candidate starts at the
@@ -180,7 +183,7 @@ class Replayer:
             points = [i for i in spec.instances.values()
                       if i.options.get("storage") == name and "storage_top" in i.options]
             if not points or name not in spec.instances:
-                raise ConfigError(f"[ports] {name}: {self.plant_name} has no coupling point whose storage is "
+                raise ConfigError(f"[ports] {name}: {self.plant_label} has no coupling point whose storage is "
                                   f"{name!r}; ports can be declared for "
                                   + (", ".join(sorted({i.options["storage"] for i in spec.instances.values()
                                                        if "storage_top" in i.options})) or "no storage"))
@@ -279,7 +282,7 @@ class Replayer:
         lost = [k for k in sub_ov if not ((self.circuit and k.startswith("mixer."))
                                           or (self.radiator and k.startswith("radiator.")))]
         if lost:
-            raise ConfigError(f"replay on {self.plant_name}: override(s) {', '.join(lost)} address instances the "
+            raise ConfigError(f"replay on {self.plant_label}: override(s) {', '.join(lost)} address instances the "
                               f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
         rows_plant = self._plant(plant_ov, n)
         out = np.full((n, len(CATALOGUE)), np.nan)

@@ -21,7 +21,7 @@ def test_a_recording_with_the_circuit_and_the_draw_is_replayed_on_the_cut():
     # of the boundaries (a whole-house run recorded every minute)
     rec = synth.make("none", days=1.0, signals=CIRCUIT, noise=False)
     rp = replay.Replayer(rec)
-    assert rp.plant_name == "house1_cut_circuit" and rp.circuit
+    assert rp.plant_label == "house1_cut_circuit" and rp.circuit
     assert {"mixer.T_sup", "storage.T_sensor_5"} <= rp.simulated and "zone.T_room" not in rp.simulated
     rows = rp.run().rows
     ctx = Context.build(rec, train_days=0.4, simulated=rp.simulated)
@@ -43,7 +43,7 @@ def test_without_the_draw_the_whole_house_is_replayed():
 def test_requirements_say_which_cut_each_signal_enables():
     req = requirements.requirements()["measured boundaries (optional; what each signal enables)"]
     text = "\n".join(req)
-    for s in cut.CUTS[0].bindings.values():
+    for s in cut.circuit_cut("house1").bindings.values():
         assert f"{s} -> cut 'circuit'" in text
     assert "switch.T_sup -> the mixing station replayed alone" in text
 
