@@ -45,7 +45,7 @@ def run(args) -> int:
 
     if args.requirements:
         requirements.check_house(args.requirements)
-        for k, v in requirements.requirements().items():
+        for k, v in requirements.requirements(args.requirements).items():
             print(f"{k}:")
             items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
             for name, sub in items:

@@ -159,6 +159,13 @@ class Kind:
     LINKS: dict = {}
     role = "component"       # generator | consumer | storage | emitter | zone | controller | ...
     ROLES: tuple = ()        # every role a kind may be named in, when more than its `role`
+    # what the diagnosis reads of an instance of the kind (plant/diagnose/roles.py), by local name:
+    RUN: tuple | None = None      # (command input, value above which the unit runs): its operating mode
+    RAN: tuple | None = None      # (output, value above which it ran): the running state a lab measures
+    PIPES: tuple = ()             # outputs read by pipe sensors on its branch (which flows by its m_flow)
+    SUBSTITUTES: dict = {}        # command input -> the output a recording may give instead (the RUN
+    #                               command standing in for a modulation: 1 while on)
+    UNMEASURED: tuple = ()        # outputs no lab measures (book-keeping, set-points): never compared
 
     def initial_state(self, inst) -> np.ndarray:
         return np.zeros(0)

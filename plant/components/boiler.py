@@ -217,6 +217,7 @@ class Kind(Generator):
     POWER = ("Q_flow", "P_fuel", "P_el")
     ENERGIES = ("E_heat", "E_fuel")
     DESCRIPTIONS = {"starts": "number of burner starts", "run_hours": "burner operating hours"}
+    RUN, RAN, PIPES = ("U_set", 2.0), ("Q_flow", 500.0), ("T_sup", "T_ret")
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -297,6 +297,7 @@ class Kind(Generator):
     NOUN = "CHP"
     MODES = (Mode.IDLE, Mode.START_UP, Mode.WARM_UP, Mode.STEADY, Mode.RUN_ON, Mode.LOCKED_OUT, Mode.FAULT)
     MODE_WORDS = {Mode.RUN_ON: "cool-down"}
+    RUN, RAN, PIPES, SUBSTITUTES = ("on", 0.5), ("P_el", 200.0), ("T_sup", "T_ret"), {"y_set": "on"}
     POWER = ("P_el", "Q_flow", "m_flow_pump", "Q_flow_meter", "P_fuel")
     ENERGIES = ("E_el", "E_heat", "E_fuel")
     DESCRIPTIONS = {"T_sup": "CHP supply (outlet) temperature", "T_ret": "CHP return (inlet) temperature",

@@ -48,6 +48,7 @@ class Kind(ComponentKind):
     name = "dhw_draw"
     Params = Params
     role = "draw"
+    UNMEASURED = ("Q_flow_missing",)
     LINKS = {"storage": link(REQUIRED, "the storage the hot water is drawn from", type=Instance,
                              range=("storage",)),
              "hot": link(REQUIRED, "height of the hot-water outlet [m]", type=Height),

@@ -237,6 +237,7 @@ class _HeatPump(Generator):
     POWER = ("Q_flow", "P_el", "COP")
     ENERGIES = ("E_el", "E_heat")
     DESCRIPTIONS = {"P_el": "electric power (- consumed: compressor and back-up heater)"}
+    RUN, RAN, PIPES = ("on", 0.5), ("Q_flow", 500.0), ("T_sup", "T_ret")
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -76,6 +76,8 @@ class Kind(ComponentKind):
     role = "consumer"
     LINKS = {"emitter": link(REQUIRED, "the emitter the station feeds (a radiator or floor heating)",
                              type=Instance, range=("emitter",))}
+    RUN, PIPES = ("m_flow_set", 0.005), ("T_sup", "T_ret")
+    SUBSTITUTES = {"m_flow_set": "m_flow", "T_sup_set": "T_sup"}
 
     def initial_state(self, inst):
         return initial_state(inst.params)

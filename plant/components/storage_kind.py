@@ -62,6 +62,7 @@ class Kind(ComponentKind):
     name = "storage"
     Params = storage.Params
     role = "storage"
+    UNMEASURED = ("E_stored", "m_flow")
     LINKS = {"sensors": link(10, "number of temperature sensors at equally spaced heights (1 = bottom)",
                              type=int, range=(1, 100)),
              "sensor_heights": link(None, "relative heights 0 (bottom) ... 1 (top) of the sensors, sensor 1 "

@@ -98,6 +98,7 @@ class Kind(ComponentKind):
     name = "zone"
     Params = Params
     role = "zone"
+    UNMEASURED = ("T_set", "Q_flow_gains", "Q_flow_solar")
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -27,6 +27,7 @@ class Kind(ComponentKind):
     name = "coil"
     Params = Params
     role = "consumer"
+    RUN = ("on", 0.5)
     LINKS = {"storage": link(REQUIRED, "the storage the coil is in", type=Instance, range=("storage",)),
              "top": link(REQUIRED, "height of the coil inlet [m above the storage bottom]", type=Height),
              "bottom": link(REQUIRED, "height of the coil outlet [m]", type=Height)}

@@ -8,6 +8,7 @@ import numpy as np
 
 from ..catalogue import CATALOGUE
 from ..errors import DataError
+from . import roles as roles_mod
 from .pipe_sensor import scored_mask
 from .requirements import comparable
 
@@ -18,41 +19,24 @@ SCALE = {"degC": 1.0, "kg/s": 0.02, "W": 500.0}
 MISMATCH_TOL = 0.3
 NOISE_SIGMAS = 3.0
 
-MODES = {
-    "chp_on": "CHP on",
-    "chp_off": "CHP off",
-    "boiler_on": "boiler on",
-    "heating_on": "heating pump on",
-    "dhw_on": "DHW charging on",
-    "chp_off_heating_on": "CHP off and heating pump on",
-    "chp_on_boiler_on": "CHP and boiler on",
-}
-
-
-#: a generator's command and the value above which it runs: the modes' flags and the states the
+#: the states of each generator (roles.py: its command and the value above which it runs) the
 #: training window must hold where the recording has them (MODE_MIN_S of each, when the recording
 #: holds twice that)
-GENERATOR_STATES = {"chp": ("chp.on", 0.5), "boiler": ("boiler.U_set", 2.0)}
 MODE_MIN_S = 1800.0
 
 
-def running(data, unit: str) -> np.ndarray:
-    """Samples at which the recording commands the generator `unit` to run."""
-    cmd, on = GENERATOR_STATES[unit]
-    return np.nan_to_num(data[cmd]) > on
-
-
-def covering_split(t, data, t_split: float, t_max: float) -> float:
+def covering_split(t, data, t_split: float, t_max: float, generators=None) -> float:
     """The end of the training window: t_split, moved later (up to t_max) to the end of the first
     standstill or run of a generator that the training window lacks and the rest of the recording
     holds. Why: a candidate acting in that state (an idle CHP that keeps flowing) has nothing to be
     fitted on otherwise. rigsim's idle_flow_large (realisation 2): its CHP ran through the two
-    training days and stood five times after; fitted on no standstill, the idle flow came out 0."""
+    training days and stood five times after; fitted on no standstill, the idle flow came out 0.
+    generators: roles.Unit of the house (default house 1's)."""
     dt = np.diff(t, append=t[-1])
-    for unit, (cmd, _) in GENERATOR_STATES.items():
-        if cmd not in data:
+    for unit in generators if generators is not None else roles_mod.of().generators:
+        if unit.command not in data:
             continue
-        runs = running(data, unit)
+        runs = unit.runs(data)
         for state in (runs, ~runs):
             if dt[state & (t <= t_split)].sum() >= MODE_MIN_S or dt[state].sum() < 2 * MODE_MIN_S:
                 continue
@@ -82,6 +66,7 @@ class Context:
     flags: dict = field(default_factory=dict)
     cols: np.ndarray | None = None  # catalogue indices of the measured signals
     t_split: float = float("nan")   # end of the training window [s]
+    roles: object = None            # roles.Roles of the replayed house (its modes: flags)
     # the baseline (with_baseline): the nominal replay (replay.Replay: all catalogue signals, its
     # pipe and storage-sensor reading fits), the measured columns every candidate is judged on
     # (the nominal's, or the model a further effect goes on top of: forward.py), the subsystem
@@ -94,15 +79,18 @@ class Context:
     nominal_ranges: dict = field(default_factory=dict)
 
     @classmethod
-    def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None):
-        """simulated: the signals the replay computes (Replayer.simulated; None: all)."""
-        measured = [s for s in comparable() if rec.has(s) and (simulated is None or s in simulated)]
+    def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None, roles=None):
+        """simulated: the signals the replay computes (Replayer.simulated; None: all); roles: the
+        replayed house's (Replayer.roles; None: house 1's)."""
+        roles = roles or roles_mod.of()
+        measured = [s for s in comparable(roles.house) if rec.has(s) and (simulated is None or s in simulated)]
         t = rec.time
         n = len(t)
         valid = rec.valid if rec.valid is not None else np.ones(n, bool)
         valid = valid & (t >= t[0] + warmup_h * 3600.0)
         span = t[-1] - t[0]
-        t_split = covering_split(t, rec.data, t[0] + min(train_days * 86400.0, 0.4 * span), t[0] + 0.5 * span)
+        t_split = covering_split(t, rec.data, t[0] + min(train_days * 86400.0, 0.4 * span), t[0] + 0.5 * span,
+                                 roles.generators)
         train = valid & (t <= t_split)
         held = valid & (t > t_split)
         h_train = (t_split - t[0]) / 3600.0 - warmup_h
@@ -116,22 +104,15 @@ class Context:
         ok = np.isfinite(meas) & valid[:, None]
         # a pipe sensor's reading is modelled while its branch stands (pipe_sensor.py); the
         # samples where its branch starts or stops are not scored
-        ok &= scored_mask(rec, measured)
+        ok &= scored_mask(rec, measured, roles.pipes)
         scale = np.array([SCALE.get(CATALOGUE.signal(s).unit, 1.0) for s in measured])
         noise = np.zeros(len(measured))
         for j in range(len(measured)):
             d = np.diff(meas[:, j][np.isfinite(meas[:, j])])
             if d.size > 10:
                 noise[j] = 1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0)
-        cmd = rec.data
-        chp_on, boiler_on = running(cmd, "chp"), running(cmd, "boiler")
-        heating_on = cmd["mixer.m_flow_set"] > 0.005
-        dhw_on = cmd["dhw_pump.on"] > 0.5
-        flags = {"chp_on": chp_on, "chp_off": ~chp_on, "boiler_on": boiler_on, "heating_on": heating_on,
-                 "dhw_on": dhw_on, "chp_off_heating_on": (~chp_on) & heating_on,
-                 "chp_on_boiler_on": chp_on & boiler_on}
-        return cls(rec, measured, train, held, meas, ok, scale, noise, flags,
-                   cols=np.array([CATALOGUE.index(s) for s in measured]), t_split=t_split)
+        return cls(rec, measured, train, held, meas, ok, scale, noise, roles.flags(rec.data),
+                   cols=np.array([CATALOGUE.index(s) for s in measured]), t_split=t_split, roles=roles)
 
     def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict) -> "Context":
         """This context judged against the nominal replay `nominal` (a replay.Replay)."""
@@ -144,6 +125,11 @@ class Context:
         return self.nominal.heights if self.nominal is not None else {}
 
     # --- modes -----------------------------------------------------------------------------
+    @property
+    def modes(self) -> dict:
+        """Mode flag -> its words in the report."""
+        return self.roles.modes()
+
     def mode_mask(self, name: str) -> np.ndarray:
         return self.flags[name]
 

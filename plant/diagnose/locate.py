@@ -9,7 +9,7 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..units import UNITS
 from ..water import CP, RHO
-from .context import MISMATCH_TOL, MODES
+from .context import MISMATCH_TOL
 from .cut import subsystem
 
 KWH = UNITS["kWh"].factor  # J in one kWh (3.6e6)
@@ -151,7 +151,7 @@ def subsystems(ctx, sim: np.ndarray, mask: np.ndarray, mismatched: list[str]) ->
                 continue
             ratio = float(np.nanmean(zi[sel]) / max(np.nanmean(zi[mask[:n] & np.isfinite(zi)]), 1e-12))
             if best is None or ratio > best[1]:
-                best = (MODES[k], ratio)
+                best = (ctx.modes[k], ratio)
         out.append({"subsystem": name, "error_share": float(np.nansum(per[idx]) / total),
                     "signals": [ctx.measured[j] for j in idx],
                     "mismatched_signals": [ctx.measured[j] for j in idx if ctx.measured[j] in mismatched],
@@ -227,7 +227,7 @@ def windows(ctx, sim: np.ndarray, top: int = 5, hours: float = 1.0) -> list[dict
             modes = {k: float(np.mean(v[seg])) for k, v in ctx.flags.items()}
             out.append({"start_h": float(t[i] / 3600), "end_h": float(t[j - 1] / 3600), "error_share": share,
                         "signals": [ctx.measured[k] for k in order],
-                        "modes": {MODES[k]: round(v, 2) for k, v in modes.items()}})
+                        "modes": {ctx.modes[k]: round(v, 2) for k, v in modes.items()}})
             i = j
         else:
             i += 1

@@ -53,12 +53,6 @@ import numpy as np
 from numba import njit
 from scipy.optimize import minimize, minimize_scalar
 
-# sensor -> (its branch's flow signal, the command that starts the branch, command threshold)
-STAGNANT_PIPE = {
-    "chp.T_sup": ("chp.m_flow", "chp.on", 0.5), "chp.T_ret": ("chp.m_flow", "chp.on", 0.5),
-    "boiler.T_sup": ("boiler.m_flow", "boiler.U_set", 2.0), "boiler.T_ret": ("boiler.m_flow", "boiler.U_set", 2.0),
-    "mixer.T_sup": ("mixer.m_flow", "mixer.m_flow_set", 0.005), "mixer.T_ret": ("mixer.m_flow", "mixer.m_flow_set", 0.005),
-}
 FLOWING = 1e-3                 # kg/s: a recorded flow above it is a branch that flows; a simulated
 #                                one at or below it carries the fit of tau and M (a running pump moves 20x more)
 TAU_RANGE = (300.0, 7200.0)    # s: a bare DN20-40 pipe ... a lagged one with an immersion well
@@ -78,20 +72,29 @@ ROOM_AFTER = 6 * 3600.0        # s of recorded standstill after which a pipe rea
 MIN_ROOM_SAMPLES = 10
 
 
-def branches() -> dict:
+def _pipes(pipes: dict | None) -> dict:
+    """sensor -> (its branch's flow signal, the command that starts the branch, the command's
+    threshold): the house's roles (roles.Roles.pipes; None: house 1's)."""
+    from .roles import of
+
+    return of().pipes if pipes is None else pipes
+
+
+def branches(pipes: dict | None = None) -> dict:
     """flow signal -> the sensors on that branch."""
     out: dict = {}
-    for s, (flow, _, _) in STAGNANT_PIPE.items():
+    for s, (flow, _, _) in _pipes(pipes).items():
         out.setdefault(flow, []).append(s)
     return out
 
 
-def recorded_flowing(rec, signal: str) -> np.ndarray | None:
+def recorded_flowing(rec, signal: str, pipes: dict | None = None) -> np.ndarray | None:
     """Samples at which the recording says the sensor's branch flows (None: not a pipe sensor):
     its measured flow > FLOWING when recorded, else its command."""
-    if signal not in STAGNANT_PIPE:
+    pipes = _pipes(pipes)
+    if signal not in pipes:
         return None
-    flow, cmd, on = STAGNANT_PIPE[signal]
+    flow, cmd, on = pipes[signal]
     if rec.has(flow):
         return np.nan_to_num(rec.data[flow]) > FLOWING
     if rec.has(cmd):
@@ -99,24 +102,24 @@ def recorded_flowing(rec, signal: str) -> np.ndarray | None:
     return None
 
 
-def scored_mask(rec, measured) -> np.ndarray:
+def scored_mask(rec, measured, pipes: dict | None = None) -> np.ndarray:
     """[n, len(measured)]: False at the samples where a pipe sensor's branch starts or stops."""
     out = np.ones((len(rec.time), len(measured)), bool)
     for j, s in enumerate(measured):
-        f = recorded_flowing(rec, s)
+        f = recorded_flowing(rec, s, pipes)
         if f is not None:
             out[1:, j] = f[1:] == f[:-1]
     return out
 
 
-def plant_room(rec) -> float | None:
+def plant_room(rec, pipes: dict | None = None) -> float | None:
     """The temperature the stagnant pipes cool toward, from the recording: per branch, the median
     reading of its sensors at samples ROOM_AFTER or longer after its last recorded flow; the
     lowest branch's, within ROOM_RANGE. None: no branch stands that long."""
     t = rec.time
     out = []
-    for sensors in branches().values():
-        f = next((recorded_flowing(rec, s) for s in sensors if rec.has(s)), None)
+    for sensors in branches(pipes).values():
+        f = next((recorded_flowing(rec, s, pipes) for s in sensors if rec.has(s)), None)
         if f is None:
             continue
         last = np.where(f, np.arange(len(t)), -1)
@@ -167,7 +170,8 @@ def _reading(t, fluid, m, mass, decay, T_room):
     return out
 
 
-def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None) -> dict:
+def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None,
+          pipes: dict | None = None) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
     modelled reading (cooling toward T_room); tau and mass per branch fitted on the samples up to
     t_fit at which the branch does not run (None: no fit, the replay's own value). cols: catalogue
@@ -175,7 +179,7 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
     fits, unseen = {}, {}
-    for flow, sensors in branches().items():
+    for flow, sensors in branches(pipes).items():
         if flow not in cols or not any(s in cols for s in sensors):
             continue
         m = np.nan_to_num(out[:, cols[flow]])

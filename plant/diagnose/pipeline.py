@@ -67,9 +67,9 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
     """Check the recording, choose the replayed plant (a cut where it measures enough), frame the
     training and held-out windows."""
     requirements.check_house(house)
-    warnings = list(rec.warnings) + requirements.check(rec)
+    warnings = list(rec.warnings) + requirements.check(rec, house)
     rp = replay.Replayer(rec, house, require_cut=require_cut)
-    ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated)
+    ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated, roles=rp.roles)
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
 
 
@@ -93,7 +93,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     first = rp.run()
     warnings = list(p.warnings) + rp.notes + rp.boundary_check(first.rows)
     # a unit's own modes the twin lacks (a boiler's lock-out) are not scored (unit_modes.py)
-    modes = unit_modes.identify(ctx.rec, first.rows, CATALOGUE.index)
+    modes = unit_modes.identify(ctx.rec, first.rows, CATALOGUE.index, rp.roles.ran)
     ctx = unit_modes.apply(ctx, modes)
     nref, ranges, nominal = {"parameters": [], "params": []}, {}, first
     if refit_nominal:

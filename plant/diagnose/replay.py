@@ -25,7 +25,8 @@ from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
 from . import pipe_sensor, sensor_height
-from .requirements import BOUNDARY, COMMANDS
+from . import roles as roles_mod
+from .requirements import BOUNDARY
 
 @dataclass(frozen=True)
 class Replay:
@@ -101,7 +102,8 @@ class Replayer:
         # what the replay loads (a derived cut's file) and what the report calls it
         self.plant_name = str(self.cut.path()) if self.cut else house
         self.plant_label = self.cut.label if self.cut else str(house)
-        self.commands = [c for c in COMMANDS if c.split(".", 1)[0] not in removed]
+        self.roles = roles_mod.of(house)
+        self.commands = [c for c in self.roles.commands if c.split(".", 1)[0] not in removed]
         bound = dict(self.cut.bindings) if self.cut else {}
         self.names = self.commands + list(bound)
         self.cmd = np.column_stack([rec.data[c] for c in self.commands] + [rec.data[s] for s in bound.values()])
@@ -208,7 +210,7 @@ class Replayer:
         long standstills (pipe_sensor.plant_room), else the replayed house's storage.T_env."""
         from ..declaration import load
 
-        room = pipe_sensor.plant_room(self.rec)
+        room = pipe_sensor.plant_room(self.rec, self.roles.pipes)
         if room is not None:
             return PlantRoom(room, "recording (pipes after 6 h of standstill)")
         inst = load(self.plant_name).instances.get("storage")
@@ -299,7 +301,7 @@ class Replayer:
         cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
         t_fit = t_fit if self.t_train is not None else None
-        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit)
+        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes)
         heights = sensor_height.apply(self.rec, out, cols, n, self.heights, t_fit)
         self._checked = True
         return Replay(out, pipe, heights)

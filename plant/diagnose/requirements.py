@@ -1,6 +1,7 @@
 """What a recording must hold to be replayed and compared: the commands replayed into the twin
 (and the measured signals that may stand in for them), the boundary conditions taken from the
-twin's profiles when absent, and the measured outputs a diagnosis compares."""
+twin's profiles when absent, and the measured outputs a diagnosis compares. The commands, their
+substitutes and the outputs never compared are the house's roles (roles.py)."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,27 +9,18 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
+from . import roles as roles_mod
 
-COMMANDS = ("chp.on", "chp.y_set", "boiler.U_set", "dhw_pump.on", "mixer.T_sup_set", "mixer.m_flow_set")
-# a command the recording may replace by a measured signal (with a warning)
-SUBSTITUTES = {"mixer.m_flow_set": "mixer.m_flow", "mixer.T_sup_set": "mixer.T_sup",
-               "chp.y_set": "chp.on"}
 BOUNDARY = ("weather.T_air", "weather.E_dir", "weather.E_dif", "occupancy.presence", "household.P_el",
             "dhw.m_flow_demand")
 NOT_COMPARED_UNITS = ("J", "h", "1", "V", "W/m2")
 
 
-def comparable() -> list[str]:
+def comparable(house="house1") -> list[str]:
     """Measured plant outputs a recording can be compared on (temperatures, flows, powers)."""
-    out = []
-    for s in CATALOGUE:
-        if s.causality != "output" or s.name in BOUNDARY or s.unit in NOT_COMPARED_UNITS:
-            continue
-        if s.name in ("storage.E_stored", "zone.T_set", "zone.Q_flow_gains", "zone.Q_flow_solar",
-                      "dhw.Q_flow_missing", "storage.m_flow"):
-            continue
-        out.append(s.name)
-    return out
+    unmeasured = roles_mod.of(house).unmeasured
+    return [s.name for s in CATALOGUE if s.causality == "output" and s.name not in BOUNDARY
+            and s.unit not in NOT_COMPARED_UNITS and s.name not in unmeasured]
 
 
 #: the house the diagnosis knows: its commands, modes, cuts and effects are written for it
@@ -48,7 +40,7 @@ def check_house(house) -> None:
         raise ConfigError(f"{where}: the diagnosis replays native houses only; this house's plant is an "
                           "FMU ([house] topology = \"fmu\"): diagnose the native house it was exported from")
     known = load_spec(KNOWN_HOUSE).instances
-    used = {n.split(".", 1)[0] for n in (*COMMANDS, *BOUNDARY, *comparable())} & set(known)
+    used = {n.split(".", 1)[0] for n in (*roles_mod.of(KNOWN_HOUSE).commands, *BOUNDARY, *comparable())} & set(known)
     missing = sorted(f"{n} ({known[n].kind})" for n in used
                      if n not in spec.instances or spec.instances[n].kind != known[n].kind)
     if missing:
@@ -59,42 +51,45 @@ def check_house(house) -> None:
             f"--requirements {KNOWN_HOUSE}` lists what a recording needs)")
 
 
-def requirements() -> dict:
+def requirements(house="house1") -> dict:
+    roles = roles_mod.of(house)
     return {
-        "commands (required; replayed into the twin)": list(COMMANDS),
-        "accepted substitutes (with a warning)": {k: v for k, v in SUBSTITUTES.items()},
+        "commands (required; replayed into the twin)": list(roles.commands),
+        "accepted substitutes (with a warning)": dict(roles.substitutes),
         "boundary conditions (optional; taken from the twin's profiles by date, checked if present)": list(BOUNDARY),
         "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
-        "measured signals (compared; at least one required)": comparable(),
+        "measured signals (compared; at least one required)": comparable(house),
         "measured boundaries (optional; what each signal enables)": [
-            f"{sig} -> {what}" for sig, what in cut_mod.requirements().items()],
+            f"{sig} -> {what}" for sig, what in cut_mod.requirements(house).items()],
     }
 
 
-def check(rec) -> list[str]:
+def check(rec, house="house1") -> list[str]:
     """Reject a recording that lacks what replay needs; returns warnings for substitutions."""
+    roles = roles_mod.of(house)
+    run = {u.command: u.on_above for u in (*roles.generators, *roles.circuits, *roles.chargers)}
     warnings = []
     missing = []
-    for c in COMMANDS:
+    for c in roles.commands:
         if rec.has(c):
             continue
-        sub = SUBSTITUTES.get(c)
+        sub = roles.substitutes.get(c)
         if sub and rec.has(sub):
             v = rec.data[sub].copy()
-            if c == "chp.y_set":
-                v = np.where(v > 0.5, 1.0, 0.0)
+            if sub in run:  # a run command for a modulation: 1 while on
+                v = np.where(v > run[sub], 1.0, 0.0)
             rec.data[c] = v
-            warnings.append(f"{c}: not recorded; replayed from {sub}" + (" (modulation 1 while on)" if c == "chp.y_set" else ""))
+            warnings.append(f"{c}: not recorded; replayed from {sub}" + (" (modulation 1 while on)" if sub in run else ""))
         else:
             missing.append(c)
-    measured = [s for s in comparable() if rec.has(s)]
+    measured = [s for s in comparable(house) if rec.has(s)]
     if missing or not measured:
         lines = []
         if missing:
             lines.append("recording lacks the command(s) replay needs: " + ", ".join(missing))
         if not measured:
             lines.append("recording has no measured signal to compare")
-        req = requirements()
+        req = requirements(house)
         lines.append("a recording for replay must contain:")
         for k, v in req.items():
             lines.append(f"  {k}: {', '.join(v) if isinstance(v, list) else v}")

@@ -22,19 +22,22 @@ import dataclasses
 
 import numpy as np
 
-# unit -> (the signal whose recorded value says it runs, the threshold in its unit)
-RUNNING = {"boiler": ("boiler.Q_flow", 500.0), "chp": ("chp.P_el", 200.0)}
 # a fifth of the unit's running samples: a lock-out or a trip is occasional; beyond it the
 # states differ because the unit is run differently, which is for the diagnosis to see
 MAX_SHARE = 0.2
 
 
-def identify(rec, rows: np.ndarray, catalogue_index) -> dict:
+def identify(rec, rows: np.ndarray, catalogue_index, ran: dict | None = None) -> dict:
     """{unit: {mask (samples whose state differs), samples, share, masked, why}} for the units the
-    recording measures; rows: a replay's catalogue rows; catalogue_index: name -> column."""
+    recording measures; rows: a replay's catalogue rows; catalogue_index: name -> column; ran:
+    unit -> (the signal whose recorded value says it ran, the threshold in its unit: roles.Roles.ran;
+    None: house 1's)."""
+    from .roles import of
+
+    ran = of().ran if ran is None else ran
     out = {}
     n = len(rows)
-    for unit, (sig, thr) in RUNNING.items():
+    for unit, (sig, thr) in ran.items():
         if not rec.has(sig):
             continue
         meas = rec.data[sig][:n]
@@ -74,4 +77,4 @@ def public(modes: dict) -> dict:
     return {u: {k: v for k, v in m.items() if k != "mask"} for u, m in modes.items()}
 
 
-__all__ = ["identify", "apply", "public", "RUNNING", "MAX_SHARE"]
+__all__ = ["identify", "apply", "public", "MAX_SHARE"]

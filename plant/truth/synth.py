@@ -15,7 +15,8 @@ import numpy as np
 from ..catalogue import CATALOGUE
 from ..diagnose.effects.sensor import first_order
 from ..diagnose.recording_io import Samples, write_csv
-from ..diagnose.requirements import BOUNDARY, COMMANDS
+from ..diagnose.requirements import BOUNDARY
+from ..diagnose.roles import of as roles_of
 
 # a lab-like sensor set (the CoSES lab measures these; chp.m_flow is concealed by default)
 LAB_SIGNALS = (
@@ -59,7 +60,7 @@ def make(effect: str = "none", size: float | None = None, days: float = 3.0, sta
     times, rows = house.run(days * 86400.0, dt=1.0, out_interval=interval)
     col = {n: i for i, n in enumerate(CATALOGUE.names)}
     signals = [s for s in (signals or LAB_SIGNALS) if s not in conceal]
-    data = {c: rows[:, col[c]].copy() for c in COMMANDS}
+    data = {c: rows[:, col[c]].copy() for c in roles_of("house1").commands}
     for b in BOUNDARY[:1]:
         data[b] = rows[:, col[b]].copy()
     rng = np.random.default_rng(seed)

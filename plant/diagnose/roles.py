@@ -1,0 +1,129 @@
+"""What the diagnosis needs of a house, read from its declaration and its kinds, never from
+instance names: the commands a recording replays (what the house's controllers write), the
+units whose operating mode a recording shows (a kind's RUN: the command that starts it and the
+value above which it runs), the running state a lab measures (RAN), the pipe sensors on each
+unit's branch (PIPES), the commands a measured output may stand in for (SUBSTITUTES) and the
+outputs no lab measures (UNMEASURED). plant/component.py declares those attributes; a kind that
+sets them takes part, whatever the house calls its instance.
+
+The operating modes the diagnosis localises a mismatch in are built from the units: each
+generator on and (where its coupling point may pass an idle flow through it) off, any heating
+circuit's pump on, any charging coil's pump on, each idle-capable generator off while the
+heating runs, and each pair of generators on together.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from itertools import combinations
+
+import numpy as np
+
+from ..kinds import KINDS
+
+
+@dataclass(frozen=True)
+class Unit:
+    name: str                 # the instance
+    noun: str                 # what the report calls it (the kind's noun, the name when two share it)
+    command: str              # the recorded command that starts it
+    on_above: float           # ... and the value above which it runs
+    flow: str | None          # its branch's flow signal (the pipe sensors' evidence)
+    pipes: tuple = ()         # pipe sensors on its branch
+    ran: tuple | None = None  # (measured output, value above which it ran)
+    idles: bool = False       # its coupling point may pass an idle flow through it
+
+    def runs(self, data) -> np.ndarray:
+        """Samples at which the recording commands the unit to run."""
+        return np.nan_to_num(data[self.command]) > self.on_above
+
+
+@dataclass(frozen=True)
+class Roles:
+    house: str
+    generators: tuple         # Unit, in declaration order
+    circuits: tuple           # heating circuits (a pump the recording commands)
+    chargers: tuple           # charging coils' pumps
+    commands: tuple           # inputs the house's controllers write, in their instances' order
+    substitutes: dict         # command -> the output a recording may give instead
+    unmeasured: frozenset     # outputs never compared
+
+    def modes(self) -> dict:
+        """Mode flag -> its words in the report."""
+        out = {}
+        for g in self.generators:
+            out[f"{g.name}_on"] = f"{g.noun} on"
+            if g.idles:
+                out[f"{g.name}_off"] = f"{g.noun} off"
+        if self.circuits:
+            out["heating_on"] = "heating pump on"
+        if self.chargers:
+            out["dhw_on"] = "DHW charging on"
+        if self.circuits:
+            out.update({f"{g.name}_off_heating_on": f"{g.noun} off and heating pump on"
+                        for g in self.generators if g.idles})
+        out.update({f"{a.name}_on_{b.name}_on": f"{a.noun} and {b.noun} on"
+                    for a, b in combinations(self.generators, 2)})
+        return out
+
+    def flags(self, data) -> dict:
+        """Mode flag -> samples at which the recording's commands put the house in it."""
+        on = {g.name: g.runs(data) for g in self.generators}
+        heating = np.any([c.runs(data) for c in self.circuits], axis=0) if self.circuits else None
+        out = {}
+        for g in self.generators:
+            out[f"{g.name}_on"] = on[g.name]
+            if g.idles:
+                out[f"{g.name}_off"] = ~on[g.name]
+        if heating is not None:
+            out["heating_on"] = heating
+        if self.chargers:
+            out["dhw_on"] = np.any([c.runs(data) for c in self.chargers], axis=0)
+        if heating is not None:
+            out.update({f"{g.name}_off_heating_on": ~on[g.name] & heating for g in self.generators if g.idles})
+        out.update({f"{a.name}_on_{b.name}_on": on[a.name] & on[b.name]
+                    for a, b in combinations(self.generators, 2)})
+        return out
+
+    @property
+    def pipes(self) -> dict:
+        """Pipe sensor -> (its branch's flow, the command that starts the branch, its threshold)."""
+        return {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits) for p in u.pipes}
+
+    @property
+    def ran(self) -> dict:
+        """Unit -> (the output whose recorded value says it ran, the threshold)."""
+        return {g.name: g.ran for g in self.generators if g.ran}
+
+
+@lru_cache(maxsize=32)
+def of(house="house1") -> Roles:
+    """The roles of `house` (a name or a house file)."""
+    from ..declaration import load
+
+    spec = load(house)
+    inst = list(spec.instances.values())
+    idle = {g for i in inst for g in (i.options.get("idle_flow") or {})}
+    nouns = [getattr(KINDS[i.kind], "NOUN", i.name) for i in inst if KINDS[i.kind].role == "generator"]
+
+    def unit(i) -> Unit:
+        k = KINDS[i.kind]
+        cmd, above = k.RUN
+        noun = getattr(k, "NOUN", i.name)
+        return Unit(i.name, noun if nouns.count(noun) == 1 else i.name, f"{i.name}.{cmd}", above,
+                    f"{i.name}.m_flow" if k.PIPES else None, tuple(f"{i.name}.{p}" for p in k.PIPES),
+                    (f"{i.name}.{k.RAN[0]}", k.RAN[1]) if k.RAN else None, i.name in idle)
+
+    runs = [i for i in inst if KINDS[i.kind].RUN]
+    generators = tuple(unit(i) for i in runs if KINDS[i.kind].role == "generator")
+    circuits = tuple(unit(i) for i in runs if KINDS[i.kind].role == "consumer" and KINDS[i.kind].PIPES)
+    chargers = tuple(unit(i) for i in runs if KINDS[i.kind].role == "consumer" and not KINDS[i.kind].PIPES)
+    order = {i.name: n for n, i in enumerate(inst)}
+    # a controller the house file switches off (active = 0: the substation's rules in a house run
+    # alone) writes nothing a recording must carry; its inputs stay at rest in the replay
+    written = [str(s) for i in inst if KINDS[i.kind].role == "controller" and getattr(i.params, "active", 1)
+               for s in (i.options.get("outputs") or {}).values()]
+    commands = tuple(sorted(dict.fromkeys(written), key=lambda s: order.get(s.split(".", 1)[0], len(order))))
+    substitutes = {f"{i.name}.{a}": f"{i.name}.{b}" for i in inst for a, b in KINDS[i.kind].SUBSTITUTES.items()}
+    unmeasured = frozenset(f"{i.name}.{o}" for i in inst for o in KINDS[i.kind].UNMEASURED)
+    return Roles(str(house), generators, circuits, chargers, commands, substitutes, unmeasured)
