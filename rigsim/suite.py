@@ -1,9 +1,10 @@
-"""The case suite: recordings of house 1's rig with concealed effects.
+"""The case suite: recordings of house 1's rig (default) or house 2's rig with concealed effects.
 
-    python -m rigsim.suite --out DIR [--realisation R] [--days 7] [--start 2021-01-10]
-                           [--case NAME ...] [--list]
+    python -m rigsim.suite [--house house1|house2] --out DIR [--realisation R] [--days 7]
+                           [--start 2021-01-10] [--case NAME ...] [--list]
 
-writes DIR/<case>/recording.csv, columns.toml and meta.json for each case.
+writes DIR/<case>/recording.csv, columns.toml and meta.json for each case. House 2's cases are
+in rigsim/house2/suite.py.
 """
 from __future__ import annotations
 
@@ -144,16 +145,22 @@ def main(argv=None) -> int:
     ap.add_argument("--start", default="2021-01-10")
     ap.add_argument("--case", nargs="*", help="cases to make (default: all)")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
+    ap.add_argument("--house", choices=("house1", "house2"), default="house1",
+                    help="which rig (default: house1)")
     a = ap.parse_args(argv)
+    cases, make = CASES, make_case
+    if a.house == "house2":
+        from .house2 import suite as _h2
+        cases, make = _h2.CASES, _h2.make_case
     if a.list:
-        for name, c in CASES.items():
+        for name, c in cases.items():
             print(f"{name:20s} {', '.join(c['expected']):36s} {c['description']}")
         return 0
     if not a.out:
         ap.error("--out is required")
-    names = a.case or list(CASES)
+    names = a.case or list(cases)
     for name in names:
-        m = make_case(name, a.out, days=a.days, start=a.start, realisation=a.realisation)
+        m = make(name, a.out, days=a.days, start=a.start, realisation=a.realisation)
         print(f"{name:20s} rows {m['rows']:6d}  closure {m['ledger_closure']:.1e}  "
               f"{m['generation_wall_s']:6.1f} s", flush=True)
     return 0

@@ -1,0 +1,670 @@
+"""The numerical core of rigsim's house-2 rig (SF2): one time-stepping loop (numba), 1 s step.
+
+Scheme (own choices, see rigsim/README.md "House 2"):
+* The combined storage is a column of equal cells, explicit upwind advection with any number of
+  inflows (spread over a mixing window around their port) and outflows (one cell at their port),
+  conduction between neighbours, standing loss, the solar coil's heat, then a buoyancy re-ordering
+  (an exact permutation of equal cells, energy-conserving), as rigsim's house-1 tanks.
+* Every lumped water or metal volume outside the tank (pipes, sensor pipe water, headers, the heat
+  pump's and the boiler's water + metal, the collector, the coil segments, the floor-heating water
+  and slab) is a node of a flow chain, advanced *implicitly* in the order of the flow: a node's
+  new temperature uses its upstream node's new temperature, and the enthalpy it passes on is
+  m cp T_new, exactly what the next node receives. Loops (solar, floor circuit) are broken by one
+  explicit node whose outflow leaves at its start-of-step temperature. The tank is fed with the
+  chains' outlet temperatures and gives its outflows at its start-of-step cell temperatures, so
+  the energy ledger closes to round-off while the small nodes stay stable at large flows.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+CP = 4180.0
+
+# ---- parameter vector P -------------------------------------------------------------------
+_P = """DT T_PLANT T_COLD M_CELL KCOND
+HP_C HP_UA HP_SPREAD HP_QNOM HP_PNOM HP_CAPF HP_DEFROST_S HP_MMIN_FLOW HP_MMAX_FLOW HP_AUX_W
+HPP_C HPP_UA VALVE_T LEAK
+BOI_C BOI_UA BOI_DTSET BOI_ETAF
+HDR_C_S HDR_C_R HDR_UA HC_C_S HC_C_R
+COL_A COL_ETA0 COL_A1 COL_A2 COL_C SOL_PIPE_C SOL_PIPE_UA SOL_PUMP_F SOL_UA_SEG SOL_C_SEG
+PV_KWP
+HC_PUMP_MAX HC_T_RUN HC_TSET HC_KI
+FL_C_SEG FL_UA_SEG SLAB_C FL_K FL_N
+B_CR B_CM B_HRM B_HRO B_HMO B_AWIN B_NPERS B_WPERS
+T_DAY T_NIGHT TAU_PROBE TAU_ROOM TAU_COLL T_DHW"""
+P_NAMES = _P.split()
+for _i, _n in enumerate(P_NAMES):
+    globals()["P_" + _n] = _i
+N_PARAM = len(P_NAMES)
+
+# sensor pipe-water nodes (index into the s-arrays)
+S_HP_VL, S_HP_RL, S_CB_VL, S_CB_RL, S_HC_VL, S_HC_RL = range(6)
+
+# lumped node temperatures: nodes[]
+_N = """HP HPR_PIPE HPS_PIPE HP_VL HP_RL BOI CB_VL CB_RL SH RH HCS HCR HC_VL HC_RL COL SPS SPR SLAB
+ROOM MASS"""
+N_NAMES = _N.split()
+for _i, _n in enumerate(N_NAMES):
+    globals()["N_" + _n] = _i
+N_NODES = len(N_NAMES)
+
+# ledger
+_L = """GAS EL AMB SOLABS GENLOSS COLLOSS PIPELOSS STORELOSS BUILDING DHW E0 E1
+HP_RUN DEFROST HP_HEAT HP_ELC SOL_HEAT SOL_RUN LEAK_MASS TMIN TMAX"""
+L_NAMES = _L.split()
+for _i, _n in enumerate(L_NAMES):
+    globals()["L_" + _n] = _i
+N_LEDGER = len(L_NAMES)
+
+# channels, in the order of docs/lab/house2-channels.csv (checked by rigsim.house2.daq)
+CH_NAMES = """ASHP_ASHP_on ASHP_Modulation_set ASHP_AuxModulation_set ASHP_A_V3_TL EB_EB_power_kW_set
+ST_PUMP_CMD ST_S_FW_ST_VL_set STM_HCVLaM_Set_degC SFW_HCRLbM_Set_l_per_min S_TM_ambient
+DirectRadiation_W_per_m2 DiffuseRadiation_W_per_m2 TS_S_TM_BT_1 TS_S_TM_BT_2 TS_S_TM_BT_3
+TS_S_TM_BT_4 TS_S_TM_BT_5 TS_S_TM_BT_6 TS_S_TM_BT_7 TS_S_TM_BT_8 TS_S_TM_BT_9 TS_S_TM_BT_10
+HP_S_TM_VL HP_S_TM_RL HP_S_FW_HC HP_P_heat_Tot HP_P_elec_is HP_COP CB_S_TM_VL CB_S_TM_RL CB_S_FW
+CB_P_heat CB_P_gas TS_S_TM_PS_VL TS_S_TM_PS_RL ST_S_TM_COLL ST_S_TM_VL ST_S_TM_RL ST_S_FW_ST_VL
+ST_P_heat PV_P_gen P_elConsumption_kW STM_HCVLbM_degC STM_HCVLaM_degC STM_HCRL_degC
+SFW_HCRLbM_l_per_min SFW_HCVLbM_l_per_min HS_S_FW_HW S_TM_room""".split()
+N_CH = len(CH_NAMES)
+C_BT0 = CH_NAMES.index("TS_S_TM_BT_1")
+for _i, _n in enumerate(CH_NAMES):
+    globals()["C_" + _n] = _i
+
+# probes (first-order thermowell / sensor lags)
+_PR = "HP_VL HP_RL CB_VL CB_RL PS_VL PS_RL HC_HDR HC_VL HC_RL ST_VL ST_RL COLL ROOM"
+PR_NAMES = _PR.split()
+for _i, _n in enumerate(PR_NAMES):
+    globals()["PR_" + _n] = _i
+N_PROBE = len(PR_NAMES)
+
+# aux record per sample
+A_VALVE, A_HP_STATE, A_BOI_STATE, A_M_HP, A_M_SOL, A_Q_SLAB, A_M_PRIM, A_SHARE_UP = range(8)
+N_AUX = 8
+
+# integer / float controller and unit states
+_IS = "VALVE HP_CMD AUX_CMD BOI_CMD SOL_CMD HP_RUN HP_DEFR BOI_RUN BOI_LOCK SOL_WAS_ON"
+IS_NAMES = _IS.split()
+for _i, _n in enumerate(IS_NAMES):
+    globals()["I_" + _n] = _i
+N_IS = len(IS_NAMES)
+_FS = "HP_TON HP_Y BOI_TON BOI_TOFF BOI_Y BOI_MSTOP BOI_M SOL_SET HC_FSET HC_I VALVE_X U U_I HP_PREV_M"
+FS_NAMES = _FS.split()
+for _i, _n in enumerate(FS_NAMES):
+    globals()["F_" + _n] = _i
+N_FS = len(FS_NAMES)
+
+
+@njit(cache=True)
+def interp1(x, xp, fp):
+    n = xp.size
+    if x <= xp[0]:
+        return fp[0]
+    if x >= xp[n - 1]:
+        return fp[n - 1]
+    lo = 0
+    hi = n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if xp[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    w = (x - xp[lo]) / (xp[hi] - xp[lo])
+    return fp[lo] + w * (fp[hi] - fp[lo])
+
+
+@njit(cache=True)
+def interp2(x, y, xs, ys, Z):
+    """Bilinear in a grid Z[len(xs), len(ys)], edge values held beyond the grid."""
+    nx, ny = xs.size, ys.size
+    if x <= xs[0]:
+        i, wx = 0, 0.0
+    elif x >= xs[nx - 1]:
+        i, wx = nx - 2, 1.0
+    else:
+        i = 0
+        while xs[i + 1] < x:
+            i += 1
+        wx = (x - xs[i]) / (xs[i + 1] - xs[i])
+    if y <= ys[0]:
+        j, wy = 0, 0.0
+    elif y >= ys[ny - 1]:
+        j, wy = ny - 2, 1.0
+    else:
+        j = 0
+        while ys[j + 1] < y:
+            j += 1
+        wy = (y - ys[j]) / (ys[j + 1] - ys[j])
+    a = Z[i, j] + wy * (Z[i, j + 1] - Z[i, j])
+    b = Z[i + 1, j] + wy * (Z[i + 1, j + 1] - Z[i + 1, j])
+    return a + wx * (b - a)
+
+
+@njit(cache=True)
+def at_height(T, pos):
+    """Temperature at a position in cell units (cell j's centre at j + 0.5)."""
+    x = pos - 0.5
+    n = T.size
+    if x <= 0.0:
+        return T[0]
+    if x >= n - 1:
+        return T[n - 1]
+    j = int(x)
+    w = x - j
+    return T[j] + w * (T[j + 1] - T[j])
+
+
+@njit(cache=True, inline="always")
+def chain(T, C, m, T_in, Q, UA, T_env, dt):
+    """Implicit update of one chain node: returns (T_new, loss rate [W] at T_new)."""
+    Tn = (C * T + dt * (m * CP * T_in + Q + UA * T_env)) / (C + dt * (m * CP + UA))
+    return Tn, UA * (Tn - T_env)
+
+
+@njit(cache=True)
+def tank_multi(T, M, dt, S, SE, R, kcond, UA, T_env, extra_Q, dE):
+    """One explicit step of the storage column with inflows S [kg/s] carrying SE [kg/s * degC]
+    and outflows R [kg/s] per cell (sum S = sum R), extra_Q [W] per cell. Returns the standing
+    loss [W]."""
+    n = T.size
+    F = 0.0
+    loss = 0.0
+    for j in range(n):
+        Fup = F + S[j] - R[j]
+        e = SE[j] - R[j] * T[j]
+        if F > 0.0:
+            e += F * T[j - 1]
+        else:
+            e += F * T[j]
+        if j < n - 1:
+            if Fup > 0.0:
+                e -= Fup * T[j]
+            else:
+                e -= Fup * T[j + 1]
+        ql = UA[j] * (T[j] - T_env)
+        loss += ql
+        q = CP * e + extra_Q[j] - ql
+        if j > 0:
+            q += kcond * (T[j - 1] - T[j])
+        if j < n - 1:
+            q += kcond * (T[j + 1] - T[j])
+        dE[j] = q
+        F = Fup
+    c = dt / (M * CP)
+    for j in range(n):
+        T[j] += dE[j] * c
+    for j in range(1, n):
+        v = T[j]
+        k = j - 1
+        while k >= 0 and T[k] > v:
+            T[k + 1] = T[k]
+            k -= 1
+        T[k + 1] = v
+    return loss
+
+
+@njit(cache=True)
+def stored_heat(P, nodes, C_nodes, Tt, Tc, Tf):
+    """Heat held by every node of the hydronic system [J above 0 degC] (building nodes excluded)."""
+    e = P[P_M_CELL] * CP * np.sum(Tt) + P[P_SOL_C_SEG] * np.sum(Tc) + P[P_FL_C_SEG] * np.sum(Tf)
+    for i in range(N_NODES):
+        if i != N_ROOM and i != N_MASS:
+            e += C_nodes[i] * nodes[i]
+    return e
+
+
+@njit(cache=True)
+def _hyst(state, on_cond, off_cond):
+    if off_cond:
+        return 0
+    if on_cond:
+        return 1
+    return state
+
+
+@njit(cache=True)
+def plc(P, ist, fst, sb, pr, hour, dt):
+    """The lab PLC's rules (rig description section 4), in their order, once a second."""
+    up = ist[I_VALVE]
+    up = _hyst(up, sb[7] < 55.0, sb[6] > 60.0)
+    ist[I_VALVE] = up
+    hp = _hyst(ist[I_HP_CMD], up == 1 or sb[2] < 43.0, up == 0 and sb[1] > 45.0)
+    ist[I_HP_CMD] = hp
+    ist[I_AUX_CMD] = _hyst(ist[I_AUX_CMD], hp == 1 and (sb[7] < 50.0 or sb[2] < 35.0),
+                           hp == 0 or ((sb[6] > 55.0 or up == 0) and sb[1] > 40.0))
+    ist[I_BOI_CMD] = _hyst(ist[I_BOI_CMD], sb[9] < 55.0 or sb[4] < 35.0, sb[4] > 60.0)
+    dT = pr[PR_COLL] - sb[4]
+    ist[I_SOL_CMD] = _hyst(ist[I_SOL_CMD], dT > 3.0, dT < 2.0 or sb[4] > 95.0)
+    if ist[I_SOL_CMD] == 1:
+        T_ret = pr[PR_ST_RL] if ist[I_SOL_WAS_ON] == 1 else sb[4]
+        fst[F_SOL_SET] = min(20.0, max(0.0, 20.0 * (pr[PR_COLL] - T_ret - 3.0) / 4.0))
+    else:
+        fst[F_SOL_SET] = 0.0
+    ist[I_SOL_WAS_ON] = 1 if (ist[I_SOL_CMD] == 1 and fst[F_SOL_SET] > 0.0) else 0
+    # room thermostat (PI, clamped, integration stops at a limit when e pushes beyond)
+    T_set = P[P_T_NIGHT] if (hour >= 23.0 or hour < 7.0) else P[P_T_DAY]
+    e = T_set - pr[PR_ROOM]
+    out = e + fst[F_HC_I] / 1800.0
+    if not ((out >= 1.0 and e > 0.0) or (out <= 0.0 and e < 0.0)):
+        fst[F_HC_I] += e * dt
+        out = e + fst[F_HC_I] / 1800.0
+    fst[F_HC_FSET] = 15.0 * min(1.0, max(0.0, out))
+
+
+@njit(cache=True)
+def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
+        w_hp_up, w_hp_lo, k_hp_up_out, k_hp_lo_out, w_boi, k_boi_out, k_hc_out, w_hc_in, w_cold,
+        k_hot, t_UA, coil_W,
+        amb_T, amb_A, amb_Q, amb_P, mod_T, mod_M, mod_Q, mod_P,
+        b_max_T, b_max_Q, b_min_T, b_min_Q, b_eta_T, b_eta, c_T, c_M, c_P, c_dT, c_E,
+        su_t, su_f, cd_t, cd_q, cd_m,
+        in_Tout, in_Edir, in_Edif, in_Gabs, in_Gtilt, in_pres, in_Phouse, in_qtap, in_gwin,
+        t0, n_steps, log_step, sample_steps, eff_tag, eff_tau, eff_offset,
+        rec, aux, ledger):
+    dt = P[P_DT]
+    n = Tt.size
+    nc = Tc.size
+    nf = Tf.size
+    T_pl = P[P_T_PLANT]
+    S = np.zeros(n)
+    SE = np.zeros(n)
+    R = np.zeros(n)
+    dE = np.zeros(n)
+    Qt = np.zeros(n)
+    sb = np.empty(10)
+    a_sb = np.empty(10)
+    for i in range(10):
+        sb[i] = at_height(Tt, sens_pos[i])
+        a_sb[i] = 1.0 - np.exp(-dt / sens_tau[i])
+    a_pr = 1.0 - np.exp(-dt / P[P_TAU_PROBE])
+    a_room = 1.0 - np.exp(-dt / P[P_TAU_ROOM])
+    a_coll = 1.0 - np.exp(-dt / P[P_TAU_COLL])
+    a_eff = 1.0 - np.exp(-dt / eff_tau) if eff_tau > 0.0 else 1.0
+    pr = np.empty(N_PROBE)
+    pr[PR_HP_VL] = nodes[N_HP_VL]
+    pr[PR_HP_RL] = nodes[N_HP_RL]
+    pr[PR_CB_VL] = nodes[N_CB_VL]
+    pr[PR_CB_RL] = nodes[N_CB_RL]
+    pr[PR_PS_VL] = nodes[N_SH]
+    pr[PR_PS_RL] = nodes[N_RH]
+    pr[PR_HC_HDR] = nodes[N_HCS]
+    pr[PR_HC_VL] = nodes[N_HC_VL]
+    pr[PR_HC_RL] = nodes[N_HC_RL]
+    pr[PR_ST_VL] = nodes[N_SPS]
+    pr[PR_ST_RL] = Tc[nc - 1]
+    pr[PR_COLL] = nodes[N_COL]
+    pr[PR_ROOM] = nodes[N_ROOM]
+    ist = np.zeros(N_IS, dtype=np.int64)
+    fst = np.zeros(N_FS)
+    fst[F_HP_TON] = -1e9
+    fst[F_BOI_TON] = -1e9
+    fst[F_BOI_TOFF] = -1e9
+    ch = np.zeros(N_CH)
+    lag_state = 0.0
+    started = False
+    isamp = 0
+    ledger[L_TMIN] = 1e9
+    ledger[L_TMAX] = -1e9
+    n_min = in_Tout.size
+    for step in range(n_steps):
+        t = (step - log_step) * dt
+        if step == log_step:
+            ledger[L_E0] = stored_heat(P, nodes, C_nodes, Tt, Tc, Tf)
+        k = int((t - t0) / 60.0)
+        if k >= n_min:
+            k = n_min - 1
+        T_out = in_Tout[k]
+        hour = ((t % 86400.0) + 86400.0) % 86400.0 / 3600.0
+        plc(P, ist, fst, sb, pr, hour, dt)
+
+        # ---------------- heat pump ----------------
+        hp_state = 0       # 0 off, 1 start delay, 2 heating, 3 defrost, 4 blocked
+        Q_hp = 0.0
+        P_comp = 0.0
+        Q_aux = 0.0
+        m_hp = 0.0
+        if ist[I_HP_CMD] == 1 and ist[I_HP_RUN] == 0:
+            ist[I_HP_RUN] = 1
+            fst[F_HP_TON] = t
+            fst[F_HP_Y] = 0.0
+        tau = 0.0
+        in_defrost = False
+        if ist[I_HP_RUN] == 1:
+            tau = t - fst[F_HP_TON]
+            in_defrost = (T_out < 5.0 and tau >= 10.0
+                          and (tau % 1800.0) >= 1800.0 - P[P_HP_DEFROST_S])
+            if ist[I_HP_CMD] == 0 and not in_defrost:
+                ist[I_HP_RUN] = 0
+        if ist[I_HP_RUN] == 1:
+            fst[F_HP_Y] = min(1.0, fst[F_HP_Y] + 0.025 * dt)
+            if tau < 10.0:
+                hp_state = 1
+            elif in_defrost:
+                hp_state = 3
+            elif nodes[N_HP_RL] >= 68.0:
+                hp_state = 4
+                m_hp = P[P_HP_MMIN_FLOW]
+            else:
+                hp_state = 2
+                mod = 1.0 if ist[I_AUX_CMD] == 1 else max(0.2, fst[F_HP_Y])
+                Tk = max(15.0, nodes[N_HP_RL] + 5.0) + 273.15
+                Tak = T_out + 273.15
+                Q_tab = (P[P_HP_QNOM] * interp2(Tk, Tak, amb_T, amb_A, amb_Q)
+                         * interp2(Tk, mod, mod_T, mod_M, mod_Q))
+                P_comp = (P[P_HP_PNOM] * interp2(Tk, Tak, amb_T, amb_A, amb_P)
+                          * interp2(Tk, mod, mod_T, mod_M, mod_P))
+                Q_hp = Q_tab * P[P_HP_CAPF]
+                Q_aux = P[P_HP_AUX_W] if ist[I_AUX_CMD] == 1 else 0.0
+                m_hp = min(P[P_HP_MMAX_FLOW], max(P[P_HP_MMIN_FLOW], Q_hp / (CP * P[P_HP_SPREAD])))
+        # three-way valve: position x moves to its port pair within the switch-over time
+        target = 1.0 if ist[I_VALVE] == 1 else 0.0
+        if P[P_VALVE_T] <= dt:
+            fst[F_VALVE_X] = target
+        else:
+            d = target - fst[F_VALVE_X]
+            lim = dt / P[P_VALVE_T]
+            fst[F_VALVE_X] += min(lim, max(-lim, d))
+        s_up = P[P_LEAK] + (1.0 - 2.0 * P[P_LEAK]) * fst[F_VALVE_X]
+
+        # ---------------- boiler ----------------
+        T_bret = nodes[N_CB_RL]
+        if ist[I_BOI_LOCK] == 0 and T_bret > 75.0:
+            ist[I_BOI_LOCK] = 1
+        elif ist[I_BOI_LOCK] == 1 and T_bret < 70.0:
+            ist[I_BOI_LOCK] = 0
+        if (ist[I_BOI_CMD] == 1 and ist[I_BOI_RUN] == 0 and ist[I_BOI_LOCK] == 0
+                and t - fst[F_BOI_TOFF] >= 300.0):
+            ist[I_BOI_RUN] = 1
+            fst[F_BOI_TON] = t
+            fst[F_BOI_Y] = 0.0
+        elif ist[I_BOI_RUN] == 1 and (ist[I_BOI_CMD] == 0 or ist[I_BOI_LOCK] == 1):
+            ist[I_BOI_RUN] = 0
+            fst[F_BOI_TOFF] = t
+            fst[F_BOI_MSTOP] = fst[F_BOI_M]
+        Q_b = 0.0
+        P_gas = 0.0
+        m_b = 0.0
+        boi_state = 0
+        if ist[I_BOI_RUN] == 1:
+            boi_state = 1
+            fst[F_BOI_Y] = min(1.0, fst[F_BOI_Y] + 0.025 * dt)
+            mod = max(0.2, fst[F_BOI_Y])
+            Ts = max(T_bret, 20.0)
+            Tk = Ts + 273.15
+            p20 = interp2(Tk, 0.2, c_T, c_M, c_P)
+            p100 = interp2(Tk, 1.0, c_T, c_M, c_P)
+            sh = (interp2(Tk, mod, c_T, c_M, c_P) - p20) / (p100 - p20)
+            qmin = interp1(Tk, b_min_T, b_min_Q)
+            qmax = interp1(Tk, b_max_T, b_max_Q)
+            Q_ss = qmin + (qmax - qmin) * sh
+            eta = (interp1(Tk, b_eta_T, b_eta) * interp2(Tk, mod, c_T, c_M, c_E)
+                   / interp2(Tk, 1.0, c_T, c_M, c_E))
+            spread = interp2(Tk, mod, c_T, c_M, c_dT) * P[P_BOI_DTSET]
+            m_ss = Q_ss / (CP * spread)
+            P_gas = Q_ss / eta
+            tau = t - fst[F_BOI_TON]
+            f = interp1(tau, su_t, su_f) if tau < 300.0 else 1.0
+            Q_b = f * Q_ss * P[P_BOI_ETAF]
+            m_b = f * m_ss
+            fst[F_BOI_M] = m_b
+        elif t - fst[F_BOI_TOFF] < 70.0:
+            boi_state = 2   # run-on: the pump carries the water + metal's heat out, no gas
+            m_b = interp1(t - fst[F_BOI_TOFF], cd_t, cd_m) * fst[F_BOI_MSTOP]
+
+        # ---------------- solar ----------------
+        m_s = fst[F_SOL_SET] / 60.0 * P[P_SOL_PUMP_F]
+        # ---------------- heating circuit: mixing station ----------------
+        m_hc = min(fst[F_HC_FSET] / 60.0, P[P_HC_PUMP_MAX])
+        if m_hc > 0.0:
+            den = pr[PR_HC_HDR] - pr[PR_HC_RL]
+            base = (P[P_HC_TSET] - pr[PR_HC_RL]) / den if den > 0.5 else 1.0
+            fst[F_U_I] = min(0.3, max(-0.3, fst[F_U_I] + P[P_HC_KI] * (P[P_HC_TSET] - pr[PR_HC_VL]) * dt))
+            u_star = min(1.0, max(0.0, base + fst[F_U_I]))
+        else:
+            u_star = 0.0
+        du = u_star - fst[F_U]
+        lim = dt / P[P_HC_T_RUN]
+        fst[F_U] += min(lim, max(-lim, du))
+        m_p = fst[F_U] * m_hc
+
+        # ---------------- DHW ----------------
+        q_tap = in_qtap[k]
+        T_top = Tt[k_hot]
+        if T_top > P[P_T_DHW]:
+            q_hot = q_tap * (P[P_T_DHW] - P[P_T_COLD]) / (T_top - P[P_T_COLD])
+        else:
+            q_hot = q_tap
+
+        # ================= advance: chains (implicit), then the tank (explicit) ==========
+        T_hp_src = s_up * Tt[k_hp_up_out] + (1.0 - s_up) * Tt[k_hp_lo_out]
+        ploss = 0.0
+        T_new, l1 = chain(nodes[N_HPR_PIPE], C_nodes[N_HPR_PIPE], m_hp, T_hp_src, 0.0, P[P_HPP_UA], T_out, dt)
+        nodes[N_HPR_PIPE] = T_new
+        T_new, l2 = chain(nodes[N_HP_RL], C_nodes[N_HP_RL], m_hp, nodes[N_HPR_PIPE], 0.0, s_UA[S_HP_RL], T_pl, dt)
+        nodes[N_HP_RL] = T_new
+        T_new, l3 = chain(nodes[N_HP], C_nodes[N_HP], m_hp, nodes[N_HP_RL], Q_hp + Q_aux, P[P_HP_UA], T_out, dt)
+        nodes[N_HP] = T_new
+        T_new, l4 = chain(nodes[N_HP_VL], C_nodes[N_HP_VL], m_hp, nodes[N_HP], 0.0, s_UA[S_HP_VL], T_pl, dt)
+        nodes[N_HP_VL] = T_new
+        T_new, l5 = chain(nodes[N_HPS_PIPE], C_nodes[N_HPS_PIPE], m_hp, nodes[N_HP_VL], 0.0, P[P_HPP_UA], T_out, dt)
+        nodes[N_HPS_PIPE] = T_new
+        ploss += l1 + l2 + l4 + l5
+        genloss = l3
+        # boiler
+        T_new, b1 = chain(nodes[N_RH], C_nodes[N_RH], m_b, Tt[k_boi_out], 0.0, P[P_HDR_UA], T_pl, dt)
+        nodes[N_RH] = T_new
+        T_new, b2 = chain(nodes[N_CB_RL], C_nodes[N_CB_RL], m_b, nodes[N_RH], 0.0, s_UA[S_CB_RL], T_pl, dt)
+        nodes[N_CB_RL] = T_new
+        T_new, b3 = chain(nodes[N_BOI], C_nodes[N_BOI], m_b, nodes[N_CB_RL], Q_b, P[P_BOI_UA], T_pl, dt)
+        nodes[N_BOI] = T_new
+        T_new, b4 = chain(nodes[N_CB_VL], C_nodes[N_CB_VL], m_b, nodes[N_BOI], 0.0, s_UA[S_CB_VL], T_pl, dt)
+        nodes[N_CB_VL] = T_new
+        T_new, b5 = chain(nodes[N_SH], C_nodes[N_SH], m_b, nodes[N_CB_VL], 0.0, P[P_HDR_UA], T_pl, dt)
+        nodes[N_SH] = T_new
+        ploss += b1 + b2 + b4 + b5
+        genloss += b3 + P_gas - Q_b
+        # heating circuit: return pipe (sensor), header, mixer + supply pipe (sensor), floor
+        # segments; the last floor segment is the loop's explicit node (leaves at its old state)
+        T_last_old = Tf[nf - 1]
+        T_new, h3 = chain(nodes[N_HC_RL], C_nodes[N_HC_RL], m_hc, T_last_old, 0.0, s_UA[S_HC_RL], T_pl, dt)
+        nodes[N_HC_RL] = T_new
+        T_new, h4 = chain(nodes[N_HCR], C_nodes[N_HCR], m_p, nodes[N_HC_RL], 0.0, P[P_HDR_UA], T_pl, dt)
+        nodes[N_HCR] = T_new
+        T_new, h1 = chain(nodes[N_HCS], C_nodes[N_HCS], m_p, Tt[k_hc_out], 0.0, P[P_HDR_UA], T_pl, dt)
+        nodes[N_HCS] = T_new
+        T_mix_in = ((m_p * nodes[N_HCS] + (m_hc - m_p) * nodes[N_HC_RL]) / m_hc if m_hc > 0.0
+                    else nodes[N_HC_RL])
+        T_new, h2 = chain(nodes[N_HC_VL], C_nodes[N_HC_VL], m_hc, T_mix_in, 0.0, s_UA[S_HC_VL], T_pl, dt)
+        nodes[N_HC_VL] = T_new
+        T_prev = nodes[N_HC_VL]
+        Q_slab_in = 0.0
+        T_slab = nodes[N_SLAB]
+        for j in range(nf - 1):
+            Tn = ((P[P_FL_C_SEG] * Tf[j] + dt * (m_hc * CP * T_prev + P[P_FL_UA_SEG] * T_slab))
+                  / (P[P_FL_C_SEG] + dt * (m_hc * CP + P[P_FL_UA_SEG])))
+            Q_slab_in += P[P_FL_UA_SEG] * (Tn - T_slab)
+            Tf[j] = Tn
+            T_prev = Tn
+        q_l = P[P_FL_UA_SEG] * (T_last_old - T_slab)
+        Q_slab_in += q_l
+        Tf[nf - 1] = T_last_old + dt / P[P_FL_C_SEG] * (m_hc * CP * (T_prev - T_last_old) - q_l)
+        ploss += h1 + h2 + h3 + h4
+        # slab and building
+        dTs = T_slab - nodes[N_ROOM]
+        Q_emit = P[P_FL_K] * (abs(dTs) ** P[P_FL_N]) * (1.0 if dTs >= 0.0 else -1.0)
+        nodes[N_SLAB] = T_slab + dt / C_nodes[N_SLAB] * (Q_slab_in - Q_emit)
+        T_r = nodes[N_ROOM]
+        T_m = nodes[N_MASS]
+        Q_win = in_gwin[k]
+        Q_int = P[P_B_NPERS] * P[P_B_WPERS] * in_pres[k] + in_Phouse[k]
+        q_rm = P[P_B_HRM] * (T_r - T_m)
+        nodes[N_ROOM] = T_r + dt / P[P_B_CR] * (Q_emit + 0.5 * Q_win + Q_int - q_rm - P[P_B_HRO] * (T_r - T_out))
+        nodes[N_MASS] = T_m + dt / P[P_B_CM] * (q_rm + 0.5 * Q_win - P[P_B_HMO] * (T_m - T_out))
+        # solar loop: collector (implicit, fed by the explicit return pipe), supply pipe, coil
+        T_spr_old = nodes[N_SPR]
+        dTc = nodes[N_COL] - T_out
+        Q_abs = P[P_COL_ETA0] * P[P_COL_A] * in_Gabs[k]
+        Q_cl = P[P_COL_A] * (P[P_COL_A1] * dTc + P[P_COL_A2] * dTc * abs(dTc))
+        T_new, _ = chain(nodes[N_COL], C_nodes[N_COL], m_s, T_spr_old, Q_abs - Q_cl, 0.0, T_out, dt)
+        nodes[N_COL] = T_new
+        T_new, s1 = chain(nodes[N_SPS], C_nodes[N_SPS], m_s, nodes[N_COL], 0.0, P[P_SOL_PIPE_UA], T_out, dt)
+        nodes[N_SPS] = T_new
+        for j in range(n):
+            Qt[j] = 0.0
+        T_prev = nodes[N_SPS]
+        for kk in range(nc):
+            Tb = 0.0
+            for j in range(n):
+                Tb += coil_W[kk, j] * Tt[j]
+            Tn = ((P[P_SOL_C_SEG] * Tc[kk] + dt * (m_s * CP * T_prev + P[P_SOL_UA_SEG] * Tb))
+                  / (P[P_SOL_C_SEG] + dt * (m_s * CP + P[P_SOL_UA_SEG])))
+            q = P[P_SOL_UA_SEG] * (Tn - Tb)
+            for j in range(n):
+                Qt[j] += coil_W[kk, j] * q
+            Tc[kk] = Tn
+            T_prev = Tn
+        s2 = P[P_SOL_PIPE_UA] * (T_spr_old - T_out)
+        nodes[N_SPR] = T_spr_old + dt / C_nodes[N_SPR] * (m_s * CP * (T_prev - T_spr_old) - s2)
+        ploss += s1 + s2
+        # the tank: every inflow and outflow of this step
+        for j in range(n):
+            S[j] = 0.0
+            SE[j] = 0.0
+            R[j] = 0.0
+        m_up = s_up * m_hp
+        m_lo = m_hp - m_up
+        T_hin = nodes[N_HPS_PIPE]
+        for j in range(n):
+            s_in = m_up * w_hp_up[j] + m_lo * w_hp_lo[j]
+            S[j] += s_in
+            SE[j] += s_in * T_hin
+            s_in = m_b * w_boi[j]
+            S[j] += s_in
+            SE[j] += s_in * nodes[N_SH]
+            s_in = m_p * w_hc_in[j]
+            S[j] += s_in
+            SE[j] += s_in * nodes[N_HCR]
+            s_in = q_hot * w_cold[j]
+            S[j] += s_in
+            SE[j] += s_in * P[P_T_COLD]
+        R[k_hp_up_out] += m_up
+        R[k_hp_lo_out] += m_lo
+        R[k_boi_out] += m_b
+        R[k_hc_out] += m_p
+        R[k_hot] += q_hot
+        L_t = tank_multi(Tt, P[P_M_CELL], dt, S, SE, R, P[P_KCOND], t_UA, T_pl, Qt, dE)
+
+        # ================= ledger =================
+        if step >= log_step:
+            ledger[L_GAS] += P_gas * dt
+            ledger[L_EL] += (P_comp + Q_aux) * dt
+            ledger[L_AMB] += (Q_hp - P_comp) * dt
+            ledger[L_SOLABS] += Q_abs * dt
+            ledger[L_GENLOSS] += genloss * dt
+            ledger[L_COLLOSS] += Q_cl * dt
+            ledger[L_PIPELOSS] += ploss * dt
+            ledger[L_STORELOSS] += L_t * dt
+            ledger[L_BUILDING] += Q_emit * dt
+            ledger[L_DHW] += q_hot * CP * (T_top - P[P_T_COLD]) * dt
+            if ist[I_HP_RUN] == 1:
+                ledger[L_HP_RUN] += dt
+            if hp_state == 3:
+                ledger[L_DEFROST] += dt
+            ledger[L_HP_HEAT] += (Q_hp + Q_aux) * dt
+            ledger[L_HP_ELC] += (P_comp + Q_aux) * dt
+            ledger[L_SOL_HEAT] += m_s * CP * (nodes[N_SPS] - Tc[nc - 1]) * dt
+            if m_s > 0.0:
+                ledger[L_SOL_RUN] += dt
+            if fst[F_VALVE_X] > 0.5:
+                ledger[L_LEAK_MASS] += (1.0 - s_up) * m_hp * dt
+            else:
+                ledger[L_LEAK_MASS] += s_up * m_hp * dt
+            if step % 20 == 0:
+                for j in range(n):
+                    ledger[L_TMIN] = min(ledger[L_TMIN], Tt[j])
+                    ledger[L_TMAX] = max(ledger[L_TMAX], Tt[j])
+
+        # ================= sensors =================
+        for i in range(10):
+            sb[i] += a_sb[i] * (at_height(Tt, sens_pos[i]) - sb[i])
+        pr[PR_HP_VL] += a_pr * (nodes[N_HP_VL] - pr[PR_HP_VL])
+        pr[PR_HP_RL] += a_pr * (nodes[N_HP_RL] - pr[PR_HP_RL])
+        pr[PR_CB_VL] += a_pr * (nodes[N_CB_VL] - pr[PR_CB_VL])
+        pr[PR_CB_RL] += a_pr * (nodes[N_CB_RL] - pr[PR_CB_RL])
+        pr[PR_PS_VL] += a_pr * (nodes[N_SH] - pr[PR_PS_VL])
+        pr[PR_PS_RL] += a_pr * (nodes[N_RH] - pr[PR_PS_RL])
+        pr[PR_HC_HDR] += a_pr * (nodes[N_HCS] - pr[PR_HC_HDR])
+        pr[PR_HC_VL] += a_pr * (nodes[N_HC_VL] - pr[PR_HC_VL])
+        pr[PR_HC_RL] += a_pr * (nodes[N_HC_RL] - pr[PR_HC_RL])
+        pr[PR_ST_VL] += a_pr * (nodes[N_SPS] - pr[PR_ST_VL])
+        pr[PR_ST_RL] += a_pr * (Tc[nc - 1] - pr[PR_ST_RL])
+        pr[PR_COLL] += a_coll * (nodes[N_COL] - pr[PR_COLL])
+        pr[PR_ROOM] += a_room * (nodes[N_ROOM] - pr[PR_ROOM])
+
+        # ================= channels =================
+        heating = hp_state == 2
+        ch[C_ASHP_ASHP_on] = ist[I_HP_CMD]
+        ch[C_ASHP_Modulation_set] = 100.0 * ist[I_HP_CMD]
+        ch[C_ASHP_AuxModulation_set] = 100.0 * ist[I_AUX_CMD]
+        ch[C_ASHP_A_V3_TL] = 1 - ist[I_VALVE]
+        ch[C_EB_EB_power_kW_set] = 20.0 * ist[I_BOI_CMD]
+        ch[C_ST_PUMP_CMD] = ist[I_SOL_CMD]
+        ch[C_ST_S_FW_ST_VL_set] = fst[F_SOL_SET]
+        ch[C_STM_HCVLaM_Set_degC] = P[P_HC_TSET]
+        ch[C_SFW_HCRLbM_Set_l_per_min] = fst[F_HC_FSET]
+        ch[C_S_TM_ambient] = T_out
+        ch[C_DirectRadiation_W_per_m2] = in_Edir[k]
+        ch[C_DiffuseRadiation_W_per_m2] = in_Edif[k]
+        for i in range(10):
+            ch[C_BT0 + i] = sb[i]
+        ch[C_HP_S_TM_VL] = pr[PR_HP_VL]
+        ch[C_HP_S_TM_RL] = pr[PR_HP_RL]
+        ch[C_HP_S_FW_HC] = m_hp * 60.0
+        ch[C_HP_P_heat_Tot] = m_hp * CP * (pr[PR_HP_VL] - pr[PR_HP_RL]) / 1000.0
+        ch[C_HP_P_elec_is] = (P_comp + Q_aux) / 1000.0 if heating else 0.015
+        ch[C_HP_COP] = (Q_hp + Q_aux) / (P_comp + Q_aux) if heating else 0.0
+        ch[C_CB_S_TM_VL] = pr[PR_CB_VL]
+        ch[C_CB_S_TM_RL] = pr[PR_CB_RL]
+        ch[C_CB_S_FW] = m_b * 60.0
+        ch[C_CB_P_heat] = m_b * CP * (pr[PR_CB_VL] - pr[PR_CB_RL]) / 1000.0
+        ch[C_CB_P_gas] = P_gas / 1000.0
+        ch[C_TS_S_TM_PS_VL] = pr[PR_PS_VL]
+        ch[C_TS_S_TM_PS_RL] = pr[PR_PS_RL]
+        ch[C_ST_S_TM_COLL] = pr[PR_COLL]
+        ch[C_ST_S_TM_VL] = pr[PR_ST_VL]
+        ch[C_ST_S_TM_RL] = pr[PR_ST_RL]
+        ch[C_ST_S_FW_ST_VL] = m_s * 60.0
+        ch[C_ST_P_heat] = m_s * CP * (pr[PR_ST_VL] - pr[PR_ST_RL]) / 1000.0
+        Gt = in_Gtilt[k]
+        T_cell = T_out + (45.0 - 20.0) / 800.0 * Gt
+        ch[C_PV_P_gen] = max(0.0, P[P_PV_KWP] * Gt / 1000.0 * 0.86 * (1.0 - 0.004 * (T_cell - 25.0)))
+        ch[C_P_elConsumption_kW] = in_Phouse[k] / 1000.0
+        ch[C_STM_HCVLbM_degC] = pr[PR_HC_HDR]
+        ch[C_STM_HCVLaM_degC] = pr[PR_HC_VL]
+        ch[C_STM_HCRL_degC] = pr[PR_HC_RL]
+        ch[C_SFW_HCRLbM_l_per_min] = m_hc * 60.0
+        ch[C_SFW_HCVLbM_l_per_min] = m_p * 60.0
+        ch[C_HS_S_FW_HW] = q_hot * 60.0
+        ch[C_S_TM_room] = pr[PR_ROOM]
+        if eff_tag >= 0:
+            x = ch[eff_tag]
+            if not started:
+                lag_state = x
+                started = True
+            lag_state += a_eff * (x - lag_state)
+            ch[eff_tag] = lag_state + eff_offset
+        if isamp < sample_steps.size and step == sample_steps[isamp]:
+            for i in range(N_CH):
+                rec[isamp, i] = ch[i]
+            aux[isamp, A_VALVE] = fst[F_VALVE_X]
+            aux[isamp, A_HP_STATE] = hp_state
+            aux[isamp, A_BOI_STATE] = boi_state
+            aux[isamp, A_M_HP] = m_hp
+            aux[isamp, A_M_SOL] = m_s
+            aux[isamp, A_Q_SLAB] = Q_emit
+            aux[isamp, A_M_PRIM] = m_p
+            aux[isamp, A_SHARE_UP] = s_up
+            isamp += 1
+    ledger[L_E1] = stored_heat(P, nodes, C_nodes, Tt, Tc, Tf)
+    return isamp

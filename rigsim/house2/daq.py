@@ -1,0 +1,96 @@
+"""The house-2 DAQ: channel list (docs/lab/house2-channels.csv, copied to rigsim/data/), noise,
+resolution, CSV and the columns file a user writes.
+
+Samples are instantaneous values at the logger's time stamps (one a minute, +-0.5 s, from the
+core's nearest 1 s step). Noise: temperatures 0.05 K RMS, flow and heat meters 1 % of reading,
+electricity and gas meters and the controller's COP 0.5 %; commands, set-points and the weather
+station's irradiances as logged (exact); then rounded to the channel's resolution.
+"""
+from __future__ import annotations
+
+import csv
+import re
+
+import numpy as np
+
+from ..daq import _decimals
+from ..tables import DATA
+from . import core
+from .model import DATASHEET
+
+
+def channel_list() -> list[dict]:
+    with open(DATA / "house2-channels.csv", encoding="utf-8") as fh:
+        return [dict(r) for r in csv.DictReader(fh)]
+
+
+_ALL = channel_list()
+CHANNELS = [
+    {"channel": r["channel"], "unit": r["unit"], "resolution": float(r["resolution"]),
+     "signal": r["twin signal (for a columns file)"], "position": r["position or source"]}
+    for r in _ALL if r["channel"] != "t_s"
+]
+NAMES = [c["channel"] for c in CHANNELS]
+if NAMES != core.CH_NAMES:
+    raise RuntimeError("rigsim.house2.core.CH_NAMES differs from house2-channels.csv")
+
+_EXACT = {"ASHP_ASHP_on", "ASHP_Modulation_set", "ASHP_AuxModulation_set", "ASHP_A_V3_TL",
+          "EB_EB_power_kW_set", "ST_PUMP_CMD", "ST_S_FW_ST_VL_set", "STM_HCVLaM_Set_degC",
+          "SFW_HCRLbM_Set_l_per_min", "DirectRadiation_W_per_m2", "DiffuseRadiation_W_per_m2"}
+_ONE_PCT = {"HP_S_FW_HC", "CB_S_FW", "ST_S_FW_ST_VL", "SFW_HCRLbM_l_per_min",
+            "SFW_HCVLbM_l_per_min", "HS_S_FW_HW", "HP_P_heat_Tot", "CB_P_heat", "ST_P_heat"}
+_HALF_PCT = {"HP_P_elec_is", "HP_COP", "CB_P_gas", "PV_P_gen", "P_elConsumption_kW"}
+
+
+def apply_daq(rec: np.ndarray, seed: int) -> np.ndarray:
+    rng = np.random.default_rng([int(seed), 99, 2])
+    out = rec.copy()
+    for i, c in enumerate(CHANNELS):
+        name, x = c["channel"], out[:, i]
+        if name in _EXACT:
+            pass
+        elif c["unit"] == "°C":
+            x = x + rng.normal(0.0, 0.05, x.size)
+        elif name in _ONE_PCT:
+            x = x * (1.0 + rng.normal(0.0, 0.01, x.size))
+        elif name in _HALF_PCT:
+            x = x * (1.0 + rng.normal(0.0, 0.005, x.size))
+        res = c["resolution"]
+        out[:, i] = np.round(x / res) * res
+    return out
+
+
+def write_csv(path, t_s: np.ndarray, data: np.ndarray) -> None:
+    fmts = ["%.3f"] + [f"%.{_decimals(c['resolution'])}f" for c in CHANNELS]
+    table = np.column_stack([t_s, data])
+    table = np.where(table == 0.0, 0.0, table)
+    np.savetxt(path, table, delimiter=",", header=",".join(["t_s"] + NAMES), comments="", fmt=fmts)
+
+
+def _signal_name(c) -> str:
+    return re.split(r"\s*\(", c["signal"].strip().strip('"'))[0].strip()
+
+
+def columns_toml(start: str, file: str = "recording.csv") -> str:
+    """The columns file a user writes: datasheet heights and ports (relative to the 1.60 m water
+    height of the channel list), units as logged, the channel list's ranges and scales."""
+    H = DATASHEET["tank_height_m"]
+    ports = ", ".join(f"{k} = {v / H:.4f}" for k, v in DATASHEET["ports_m"].items())
+    lines = ["[recording]", f'start = "{start}"', f'file = "{file}"', 'time = "t_s"', "",
+             "[ports]", f"storage = {{ {ports} }}",
+             f"solar_coil = {{ inlet = {DATASHEET['coil_top_m'] / H:.4f}, "
+             f"outlet = {DATASHEET['coil_bottom_m'] / H:.4f} }}", "", "[columns]"]
+    for c in CHANNELS:
+        name, sig, unit = c["channel"], _signal_name(c), c["unit"]
+        if name == "ASHP_A_V3_TL":
+            lines.append(f'"{name}" = {{ signal = "{sig}", range = [0, 1, 1, 0] }}')
+        elif name == "EB_EB_power_kW_set":
+            lines.append(f'"{name}" = {{ signal = "{sig}", range = [2, 20, 2, 10] }}')
+        elif name == "HP_P_elec_is":
+            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}", scale = -1 }}')
+        elif name.startswith("TS_S_TM_BT_"):
+            h = DATASHEET["sensor_heights_m"][int(name.rsplit("_", 1)[1]) - 1] / H
+            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}", height = {h:.4f} }}')
+        else:
+            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}" }}')
+    return "\n".join(lines) + "\n"
