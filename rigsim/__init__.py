@@ -1,2 +1,2 @@
-"""rigsim: a clean-room simulator of house 1's lab rig (see rigsim/README.md)."""
+"""rigsim: clean-room simulators of house 1's and (rigsim/house2) house 2's lab rigs (rigsim/README.md)."""
 __all__ = ["suite", "model", "daq", "core", "inputs", "tables"]

@@ -22,21 +22,22 @@ from numba import njit
 CP = 4180.0
 
 # ---- parameter vector P -------------------------------------------------------------------
-_P = """DT T_PLANT T_COLD M_CELL KCOND
-HP_C HP_UA HP_SPREAD HP_QNOM HP_PNOM HP_CAPF HP_DEFROST_S HP_MMIN_FLOW HP_MMAX_FLOW HP_AUX_W
-HPP_C HPP_UA VALVE_T LEAK
-BOI_C BOI_UA BOI_DTSET BOI_ETAF
-HDR_C_S HDR_C_R HDR_UA HC_C_S HC_C_R
-COL_A COL_ETA0 COL_A1 COL_A2 COL_C SOL_PIPE_C SOL_PIPE_UA SOL_PUMP_F SOL_UA_SEG SOL_C_SEG
-PV_KWP
-HC_PUMP_MAX HC_T_RUN HC_TSET HC_KI
-FL_C_SEG FL_UA_SEG SLAB_C FL_K FL_N
-B_CR B_CM B_HRM B_HRO B_HMO B_AWIN B_NPERS B_WPERS
-T_DAY T_NIGHT TAU_PROBE TAU_ROOM TAU_COLL T_DHW"""
+_P = """DT T_PLANT T_COLD M_CELL KCOND HP_UA HP_SPREAD HP_QNOM HP_PNOM HP_CAPF HP_DEFROST_S HP_MMIN_FLOW
+HP_MMAX_FLOW HP_AUX_W HPP_UA VALVE_T LEAK BOI_UA BOI_DTSET BOI_ETAF HDR_UA COL_A COL_ETA0 COL_A1
+COL_A2 SOL_PIPE_UA SOL_PUMP_F SOL_UA_SEG SOL_C_SEG PV_KWP HC_PUMP_MAX HC_T_RUN HC_TSET HC_KI
+FL_C_SEG FL_UA_SEG FL_K FL_N B_CR B_CM B_HRM B_HRO B_HMO B_NPERS B_WPERS T_DAY T_NIGHT TAU_PROBE
+TAU_ROOM TAU_COLL T_DHW"""
 P_NAMES = _P.split()
-for _i, _n in enumerate(P_NAMES):
-    globals()["P_" + _n] = _i
-N_PARAM = len(P_NAMES)
+(
+    P_DT, P_T_PLANT, P_T_COLD, P_M_CELL, P_KCOND, P_HP_UA, P_HP_SPREAD, P_HP_QNOM, P_HP_PNOM,
+    P_HP_CAPF, P_HP_DEFROST_S, P_HP_MMIN_FLOW, P_HP_MMAX_FLOW, P_HP_AUX_W, P_HPP_UA, P_VALVE_T,
+    P_LEAK, P_BOI_UA, P_BOI_DTSET, P_BOI_ETAF, P_HDR_UA, P_COL_A, P_COL_ETA0, P_COL_A1,
+    P_COL_A2, P_SOL_PIPE_UA, P_SOL_PUMP_F, P_SOL_UA_SEG, P_SOL_C_SEG, P_PV_KWP, P_HC_PUMP_MAX,
+    P_HC_T_RUN, P_HC_TSET, P_HC_KI, P_FL_C_SEG, P_FL_UA_SEG, P_FL_K, P_FL_N, P_B_CR, P_B_CM,
+    P_B_HRM, P_B_HRO, P_B_HMO, P_B_NPERS, P_B_WPERS, P_T_DAY, P_T_NIGHT, P_TAU_PROBE,
+    P_TAU_ROOM, P_TAU_COLL, P_T_DHW,
+) = range(51)
+N_PARAM = 51
 
 # sensor pipe-water nodes (index into the s-arrays)
 S_HP_VL, S_HP_RL, S_CB_VL, S_CB_RL, S_HC_VL, S_HC_RL = range(6)
@@ -45,17 +46,22 @@ S_HP_VL, S_HP_RL, S_CB_VL, S_CB_RL, S_HC_VL, S_HC_RL = range(6)
 _N = """HP HPR_PIPE HPS_PIPE HP_VL HP_RL BOI CB_VL CB_RL SH RH HCS HCR HC_VL HC_RL COL SPS SPR SLAB
 ROOM MASS"""
 N_NAMES = _N.split()
-for _i, _n in enumerate(N_NAMES):
-    globals()["N_" + _n] = _i
-N_NODES = len(N_NAMES)
+(
+    N_HP, N_HPR_PIPE, N_HPS_PIPE, N_HP_VL, N_HP_RL, N_BOI, N_CB_VL, N_CB_RL, N_SH, N_RH, N_HCS,
+    N_HCR, N_HC_VL, N_HC_RL, N_COL, N_SPS, N_SPR, N_SLAB, N_ROOM, N_MASS,
+) = range(20)
+N_NODES = 20
 
 # ledger
 _L = """GAS EL AMB SOLABS GENLOSS COLLOSS PIPELOSS STORELOSS BUILDING DHW E0 E1
 HP_RUN DEFROST HP_HEAT HP_ELC SOL_HEAT SOL_RUN LEAK_MASS TMIN TMAX"""
 L_NAMES = _L.split()
-for _i, _n in enumerate(L_NAMES):
-    globals()["L_" + _n] = _i
-N_LEDGER = len(L_NAMES)
+(
+    L_GAS, L_EL, L_AMB, L_SOLABS, L_GENLOSS, L_COLLOSS, L_PIPELOSS, L_STORELOSS, L_BUILDING,
+    L_DHW, L_E0, L_E1, L_HP_RUN, L_DEFROST, L_HP_HEAT, L_HP_ELC, L_SOL_HEAT, L_SOL_RUN,
+    L_LEAK_MASS, L_TMIN, L_TMAX,
+) = range(21)
+N_LEDGER = 21
 
 # channels, in the order of docs/lab/house2-channels.csv (checked by rigsim.house2.daq)
 CH_NAMES = """ASHP_ASHP_on ASHP_Modulation_set ASHP_AuxModulation_set ASHP_A_V3_TL EB_EB_power_kW_set
@@ -68,15 +74,27 @@ ST_P_heat PV_P_gen P_elConsumption_kW STM_HCVLbM_degC STM_HCVLaM_degC STM_HCRL_d
 SFW_HCRLbM_l_per_min SFW_HCVLbM_l_per_min HS_S_FW_HW S_TM_room""".split()
 N_CH = len(CH_NAMES)
 C_BT0 = CH_NAMES.index("TS_S_TM_BT_1")
-for _i, _n in enumerate(CH_NAMES):
-    globals()["C_" + _n] = _i
+(
+    C_ASHP_ASHP_on, C_ASHP_Modulation_set, C_ASHP_AuxModulation_set, C_ASHP_A_V3_TL,
+    C_EB_EB_power_kW_set, C_ST_PUMP_CMD, C_ST_S_FW_ST_VL_set, C_STM_HCVLaM_Set_degC,
+    C_SFW_HCRLbM_Set_l_per_min, C_S_TM_ambient, C_DirectRadiation_W_per_m2,
+    C_DiffuseRadiation_W_per_m2, C_TS_S_TM_BT_1, C_TS_S_TM_BT_2, C_TS_S_TM_BT_3, C_TS_S_TM_BT_4,
+    C_TS_S_TM_BT_5, C_TS_S_TM_BT_6, C_TS_S_TM_BT_7, C_TS_S_TM_BT_8, C_TS_S_TM_BT_9,
+    C_TS_S_TM_BT_10, C_HP_S_TM_VL, C_HP_S_TM_RL, C_HP_S_FW_HC, C_HP_P_heat_Tot, C_HP_P_elec_is,
+    C_HP_COP, C_CB_S_TM_VL, C_CB_S_TM_RL, C_CB_S_FW, C_CB_P_heat, C_CB_P_gas, C_TS_S_TM_PS_VL,
+    C_TS_S_TM_PS_RL, C_ST_S_TM_COLL, C_ST_S_TM_VL, C_ST_S_TM_RL, C_ST_S_FW_ST_VL, C_ST_P_heat,
+    C_PV_P_gen, C_P_elConsumption_kW, C_STM_HCVLbM_degC, C_STM_HCVLaM_degC, C_STM_HCRL_degC,
+    C_SFW_HCRLbM_l_per_min, C_SFW_HCVLbM_l_per_min, C_HS_S_FW_HW, C_S_TM_room,
+) = range(49)
 
 # probes (first-order thermowell / sensor lags)
 _PR = "HP_VL HP_RL CB_VL CB_RL PS_VL PS_RL HC_HDR HC_VL HC_RL ST_VL ST_RL COLL ROOM"
 PR_NAMES = _PR.split()
-for _i, _n in enumerate(PR_NAMES):
-    globals()["PR_" + _n] = _i
-N_PROBE = len(PR_NAMES)
+(
+    PR_HP_VL, PR_HP_RL, PR_CB_VL, PR_CB_RL, PR_PS_VL, PR_PS_RL, PR_HC_HDR, PR_HC_VL, PR_HC_RL,
+    PR_ST_VL, PR_ST_RL, PR_COLL, PR_ROOM,
+) = range(13)
+N_PROBE = 13
 
 # aux record per sample
 A_VALVE, A_HP_STATE, A_BOI_STATE, A_M_HP, A_M_SOL, A_Q_SLAB, A_M_PRIM, A_SHARE_UP = range(8)
@@ -85,14 +103,18 @@ N_AUX = 8
 # integer / float controller and unit states
 _IS = "VALVE HP_CMD AUX_CMD BOI_CMD SOL_CMD HP_RUN HP_DEFR BOI_RUN BOI_LOCK SOL_WAS_ON"
 IS_NAMES = _IS.split()
-for _i, _n in enumerate(IS_NAMES):
-    globals()["I_" + _n] = _i
-N_IS = len(IS_NAMES)
+(
+    I_VALVE, I_HP_CMD, I_AUX_CMD, I_BOI_CMD, I_SOL_CMD, I_HP_RUN, I_HP_DEFR, I_BOI_RUN,
+    I_BOI_LOCK, I_SOL_WAS_ON,
+) = range(10)
+N_IS = 10
 _FS = "HP_TON HP_Y BOI_TON BOI_TOFF BOI_Y BOI_MSTOP BOI_M SOL_SET HC_FSET HC_I VALVE_X U U_I HP_PREV_M"
 FS_NAMES = _FS.split()
-for _i, _n in enumerate(FS_NAMES):
-    globals()["F_" + _n] = _i
-N_FS = len(FS_NAMES)
+(
+    F_HP_TON, F_HP_Y, F_BOI_TON, F_BOI_TOFF, F_BOI_Y, F_BOI_MSTOP, F_BOI_M, F_SOL_SET,
+    F_HC_FSET, F_HC_I, F_VALVE_X, F_U, F_U_I, F_HP_PREV_M,
+) = range(14)
+N_FS = 14
 
 
 @njit(cache=True)
@@ -153,6 +175,13 @@ def at_height(T, pos):
     j = int(x)
     w = x - j
     return T[j] + w * (T[j + 1] - T[j])
+
+
+@njit(cache=True, inline="always")
+def adv(nodes, C_nodes, i, m, T_in, Q, UA, T_env, dt):
+    """chain() on nodes[i] in place; returns its loss rate [W]."""
+    nodes[i], loss = chain(nodes[i], C_nodes[i], m, T_in, Q, UA, T_env, dt)
+    return loss
 
 
 @njit(cache=True, inline="always")
@@ -419,7 +448,8 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         if m_hc > 0.0:
             den = pr[PR_HC_HDR] - pr[PR_HC_RL]
             base = (P[P_HC_TSET] - pr[PR_HC_RL]) / den if den > 0.5 else 1.0
-            fst[F_U_I] = min(0.3, max(-0.3, fst[F_U_I] + P[P_HC_KI] * (P[P_HC_TSET] - pr[PR_HC_VL]) * dt))
+            e_v = P[P_HC_TSET] - pr[PR_HC_VL]
+            fst[F_U_I] = min(0.3, max(-0.3, fst[F_U_I] + P[P_HC_KI] * e_v * dt))
             u_star = min(1.0, max(0.0, base + fst[F_U_I]))
         else:
             u_star = 0.0
@@ -439,44 +469,30 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         # ================= advance: chains (implicit), then the tank (explicit) ==========
         T_hp_src = s_up * Tt[k_hp_up_out] + (1.0 - s_up) * Tt[k_hp_lo_out]
         ploss = 0.0
-        T_new, l1 = chain(nodes[N_HPR_PIPE], C_nodes[N_HPR_PIPE], m_hp, T_hp_src, 0.0, P[P_HPP_UA], T_out, dt)
-        nodes[N_HPR_PIPE] = T_new
-        T_new, l2 = chain(nodes[N_HP_RL], C_nodes[N_HP_RL], m_hp, nodes[N_HPR_PIPE], 0.0, s_UA[S_HP_RL], T_pl, dt)
-        nodes[N_HP_RL] = T_new
-        T_new, l3 = chain(nodes[N_HP], C_nodes[N_HP], m_hp, nodes[N_HP_RL], Q_hp + Q_aux, P[P_HP_UA], T_out, dt)
-        nodes[N_HP] = T_new
-        T_new, l4 = chain(nodes[N_HP_VL], C_nodes[N_HP_VL], m_hp, nodes[N_HP], 0.0, s_UA[S_HP_VL], T_pl, dt)
-        nodes[N_HP_VL] = T_new
-        T_new, l5 = chain(nodes[N_HPS_PIPE], C_nodes[N_HPS_PIPE], m_hp, nodes[N_HP_VL], 0.0, P[P_HPP_UA], T_out, dt)
-        nodes[N_HPS_PIPE] = T_new
+        l1 = adv(nodes, C_nodes, N_HPR_PIPE, m_hp, T_hp_src, 0.0, P[P_HPP_UA], T_out, dt)
+        l2 = adv(nodes, C_nodes, N_HP_RL, m_hp, nodes[N_HPR_PIPE], 0.0, s_UA[S_HP_RL], T_pl, dt)
+        l3 = adv(nodes, C_nodes, N_HP, m_hp, nodes[N_HP_RL], Q_hp + Q_aux, P[P_HP_UA], T_out, dt)
+        l4 = adv(nodes, C_nodes, N_HP_VL, m_hp, nodes[N_HP], 0.0, s_UA[S_HP_VL], T_pl, dt)
+        l5 = adv(nodes, C_nodes, N_HPS_PIPE, m_hp, nodes[N_HP_VL], 0.0, P[P_HPP_UA], T_out, dt)
         ploss += l1 + l2 + l4 + l5
         genloss = l3
         # boiler
-        T_new, b1 = chain(nodes[N_RH], C_nodes[N_RH], m_b, Tt[k_boi_out], 0.0, P[P_HDR_UA], T_pl, dt)
-        nodes[N_RH] = T_new
-        T_new, b2 = chain(nodes[N_CB_RL], C_nodes[N_CB_RL], m_b, nodes[N_RH], 0.0, s_UA[S_CB_RL], T_pl, dt)
-        nodes[N_CB_RL] = T_new
-        T_new, b3 = chain(nodes[N_BOI], C_nodes[N_BOI], m_b, nodes[N_CB_RL], Q_b, P[P_BOI_UA], T_pl, dt)
-        nodes[N_BOI] = T_new
-        T_new, b4 = chain(nodes[N_CB_VL], C_nodes[N_CB_VL], m_b, nodes[N_BOI], 0.0, s_UA[S_CB_VL], T_pl, dt)
-        nodes[N_CB_VL] = T_new
-        T_new, b5 = chain(nodes[N_SH], C_nodes[N_SH], m_b, nodes[N_CB_VL], 0.0, P[P_HDR_UA], T_pl, dt)
-        nodes[N_SH] = T_new
+        b1 = adv(nodes, C_nodes, N_RH, m_b, Tt[k_boi_out], 0.0, P[P_HDR_UA], T_pl, dt)
+        b2 = adv(nodes, C_nodes, N_CB_RL, m_b, nodes[N_RH], 0.0, s_UA[S_CB_RL], T_pl, dt)
+        b3 = adv(nodes, C_nodes, N_BOI, m_b, nodes[N_CB_RL], Q_b, P[P_BOI_UA], T_pl, dt)
+        b4 = adv(nodes, C_nodes, N_CB_VL, m_b, nodes[N_BOI], 0.0, s_UA[S_CB_VL], T_pl, dt)
+        b5 = adv(nodes, C_nodes, N_SH, m_b, nodes[N_CB_VL], 0.0, P[P_HDR_UA], T_pl, dt)
         ploss += b1 + b2 + b4 + b5
         genloss += b3 + P_gas - Q_b
         # heating circuit: return pipe (sensor), header, mixer + supply pipe (sensor), floor
         # segments; the last floor segment is the loop's explicit node (leaves at its old state)
         T_last_old = Tf[nf - 1]
-        T_new, h3 = chain(nodes[N_HC_RL], C_nodes[N_HC_RL], m_hc, T_last_old, 0.0, s_UA[S_HC_RL], T_pl, dt)
-        nodes[N_HC_RL] = T_new
-        T_new, h4 = chain(nodes[N_HCR], C_nodes[N_HCR], m_p, nodes[N_HC_RL], 0.0, P[P_HDR_UA], T_pl, dt)
-        nodes[N_HCR] = T_new
-        T_new, h1 = chain(nodes[N_HCS], C_nodes[N_HCS], m_p, Tt[k_hc_out], 0.0, P[P_HDR_UA], T_pl, dt)
-        nodes[N_HCS] = T_new
+        h3 = adv(nodes, C_nodes, N_HC_RL, m_hc, T_last_old, 0.0, s_UA[S_HC_RL], T_pl, dt)
+        h4 = adv(nodes, C_nodes, N_HCR, m_p, nodes[N_HC_RL], 0.0, P[P_HDR_UA], T_pl, dt)
+        h1 = adv(nodes, C_nodes, N_HCS, m_p, Tt[k_hc_out], 0.0, P[P_HDR_UA], T_pl, dt)
         T_mix_in = ((m_p * nodes[N_HCS] + (m_hc - m_p) * nodes[N_HC_RL]) / m_hc if m_hc > 0.0
                     else nodes[N_HC_RL])
-        T_new, h2 = chain(nodes[N_HC_VL], C_nodes[N_HC_VL], m_hc, T_mix_in, 0.0, s_UA[S_HC_VL], T_pl, dt)
-        nodes[N_HC_VL] = T_new
+        h2 = adv(nodes, C_nodes, N_HC_VL, m_hc, T_mix_in, 0.0, s_UA[S_HC_VL], T_pl, dt)
         T_prev = nodes[N_HC_VL]
         Q_slab_in = 0.0
         T_slab = nodes[N_SLAB]
@@ -499,17 +515,16 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         Q_win = in_gwin[k]
         Q_int = P[P_B_NPERS] * P[P_B_WPERS] * in_pres[k] + in_Phouse[k]
         q_rm = P[P_B_HRM] * (T_r - T_m)
-        nodes[N_ROOM] = T_r + dt / P[P_B_CR] * (Q_emit + 0.5 * Q_win + Q_int - q_rm - P[P_B_HRO] * (T_r - T_out))
+        nodes[N_ROOM] = T_r + dt / P[P_B_CR] * (Q_emit + 0.5 * Q_win + Q_int - q_rm
+                                                 - P[P_B_HRO] * (T_r - T_out))
         nodes[N_MASS] = T_m + dt / P[P_B_CM] * (q_rm + 0.5 * Q_win - P[P_B_HMO] * (T_m - T_out))
         # solar loop: collector (implicit, fed by the explicit return pipe), supply pipe, coil
         T_spr_old = nodes[N_SPR]
         dTc = nodes[N_COL] - T_out
         Q_abs = P[P_COL_ETA0] * P[P_COL_A] * in_Gabs[k]
         Q_cl = P[P_COL_A] * (P[P_COL_A1] * dTc + P[P_COL_A2] * dTc * abs(dTc))
-        T_new, _ = chain(nodes[N_COL], C_nodes[N_COL], m_s, T_spr_old, Q_abs - Q_cl, 0.0, T_out, dt)
-        nodes[N_COL] = T_new
-        T_new, s1 = chain(nodes[N_SPS], C_nodes[N_SPS], m_s, nodes[N_COL], 0.0, P[P_SOL_PIPE_UA], T_out, dt)
-        nodes[N_SPS] = T_new
+        _ = adv(nodes, C_nodes, N_COL, m_s, T_spr_old, Q_abs - Q_cl, 0.0, T_out, dt)
+        s1 = adv(nodes, C_nodes, N_SPS, m_s, nodes[N_COL], 0.0, P[P_SOL_PIPE_UA], T_out, dt)
         for j in range(n):
             Qt[j] = 0.0
         T_prev = nodes[N_SPS]

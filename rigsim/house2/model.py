@@ -46,8 +46,9 @@ def draw_nuisance(realisation: int) -> dict:
     rng = np.random.default_rng([int(realisation), 20210201, 2])
     u = lambda a, b, n=None: rng.uniform(a, b, n)  # noqa: E731
     ports = {k: round(v + u(-0.03, 0.03), 4) for k, v in DATASHEET["ports_m"].items()}
+    heights = np.array(DATASHEET["sensor_heights_m"]) + u(-0.03, 0.03, 10)
     nz = dict(
-        sensor_heights_m=(np.array(DATASHEET["sensor_heights_m"]) + u(-0.03, 0.03, 10)).round(4).tolist(),
+        sensor_heights_m=heights.round(4).tolist(),
         sleeve_tau_s=u(20.0, 90.0, 10).round(1).tolist(),
         ports_m=ports,
         tank_diameter_m=round(0.79 * (1.0 + u(-0.02, 0.02)), 4),
