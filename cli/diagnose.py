@@ -44,12 +44,7 @@ def run(args) -> int:
     from plant.errors import ConfigError
 
     if args.requirements:
-        requirements.check_house(args.requirements)
-        for k, v in requirements.requirements(args.requirements).items():
-            print(f"{k}:")
-            items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
-            for name, sub in items:
-                print(f"  {name}" + (f"  (or {sub})" if sub else ""))
+        print("\n".join(requirements.lines(requirements.requirements(args.requirements))))
         return 0
     if not args.recording:
         raise ConfigError("twin diagnose: --recording is required (or --requirements HOUSE)")
@@ -61,7 +56,7 @@ def run(args) -> int:
         spec.loader.exec_module(mod)
     requirements.check_house(args.house)
     spec = load_spec(args.house)
-    rec = recording_io.load(args.recording, args.map, start=args.start, house_start=spec.start)
+    rec = recording_io.load(args.recording, args.map, start=args.start, house_start=spec.start, house=args.house)
     for w in rec.warnings:
         print(f"warning: {w}", file=sys.stderr)
     rec.warnings = [f"input: {w}" for w in rec.warnings]

@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 from ..errors import DataError
 from . import roles as roles_mod
 from .pipe_sensor import scored_mask
@@ -105,14 +104,14 @@ class Context:
         # a pipe sensor's reading is modelled while its branch stands (pipe_sensor.py); the
         # samples where its branch starts or stops are not scored
         ok &= scored_mask(rec, measured, roles.pipes)
-        scale = np.array([SCALE.get(CATALOGUE.signal(s).unit, 1.0) for s in measured])
+        scale = np.array([SCALE.get(roles.catalogue.signal(s).unit, 1.0) for s in measured])
         noise = np.zeros(len(measured))
         for j in range(len(measured)):
             d = np.diff(meas[:, j][np.isfinite(meas[:, j])])
             if d.size > 10:
                 noise[j] = 1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(2.0)
         return cls(rec, measured, train, held, meas, ok, scale, noise, roles.flags(rec.data),
-                   cols=np.array([CATALOGUE.index(s) for s in measured]), t_split=t_split, roles=roles)
+                   cols=np.array([roles.catalogue.index(s) for s in measured]), t_split=t_split, roles=roles)
 
     def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict) -> "Context":
         """This context judged against the nominal replay `nominal` (a replay.Replay)."""
@@ -129,6 +128,14 @@ class Context:
     def modes(self) -> dict:
         """Mode flag -> its words in the report."""
         return self.roles.modes()
+
+    def unit(self, signal: str) -> str:
+        """A signal's unit (the replayed house's catalogue)."""
+        return self.roles.catalogue.signal(signal).unit
+
+    def index(self, signal: str) -> int:
+        """A signal's column in the replay's rows (the replayed house's catalogue)."""
+        return self.roles.catalogue.index(signal)
 
     def mode_mask(self, name: str) -> np.ndarray:
         return self.flags[name]

@@ -18,7 +18,7 @@ circuit (a leaking valve) shows there and nowhere else. Its parameters are the d
 `mixer` instance with the run's overrides (`mixer.leak`), so a candidate sets them the same way
 on the whole house and on the cut.
 
-Every comparable signal belongs to one subsystem (SUBSYSTEM): the report localises the mismatch
+Every comparable signal belongs to one subsystem (roles.py, by kind): the report localises the mismatch
 per subsystem.
 """
 from __future__ import annotations
@@ -31,6 +31,7 @@ from ..errors import ConfigError
 from ..schedule import n_steps
 from ..water import CP, RHO
 from .derive import DerivedCut, derive
+from .roles import of as roles_of
 
 
 def circuit_cut(house) -> DerivedCut:
@@ -49,14 +50,11 @@ CIRCUIT_OUTPUTS = ("mixer.T_sup", "mixer.m_flow", "mixer.y_valve")
 RADIATOR_INPUTS = ("mixer.m_flow", "mixer.T_sup", "zone.T_room")
 RADIATOR_OUTPUTS = ("mixer.T_ret",)
 
-SUBSYSTEM = {"chp": "generators", "boiler": "generators", "switch": "coupling point", "supply_header":
-             "coupling point", "return_header": "coupling point", "storage": "storage", "dhw_storage": "hot water",
-             "dhw_pump": "hot water", "dhw": "hot water", "mixer": "heating circuit", "radiator": "heating circuit",
-             "zone": "room"}
+def subsystem(signal: str, roles=None) -> str:
+    """The subsystem a signal belongs to (roles.Roles.subsystem; None: house 1's)."""
+    from .roles import of
 
-
-def subsystem(signal: str) -> str:
-    return SUBSYSTEM.get(signal.split(".", 1)[0], "other")
+    return (roles or of()).subsystem(signal)
 
 
 def select(rec, house: str, required: bool = False):
@@ -87,23 +85,51 @@ def radiator_alone(rec, cut) -> bool:
     return cut is not None and "radiator" in cut.removes and all(rec.has(s) for s in RADIATOR_INPUTS + RADIATOR_OUTPUTS)
 
 
+def cuts_needed(house="house1") -> dict:
+    """{what a cut replaces: the recorded signals it needs} for `house`, or why it cannot be cut."""
+    key = "heating circuits and hot-water draws (cut 'circuit')"
+    try:
+        cut = circuit_cut(house)
+    except ConfigError as exc:
+        return {key: f"not possible: {exc}"}
+    return {key: f"all of {', '.join(cut.bindings.values())} (replaces {', '.join(cut.removes)})"}
+
+
+def _alone(house) -> bool:
+    """Whether the mixing station and the radiators can be replayed alone: written for house 1's
+    layout (a station `mixer` on the coupling point `switch`, feeding `radiator`)."""
+    from ..declaration import load
+
+    inst = load(house).instances
+    return (getattr(inst.get("mixer"), "kind", None) == "mixing_station"
+            and getattr(inst.get("radiator"), "kind", None) == "radiator"
+            and "mixer" in (getattr(inst.get("switch"), "options", {}).get("consumers") or ()))
+
+
 def requirements(house="house1") -> dict:
     """What each recorded signal enables (twin diagnose --requirements)."""
     out = {}
-    for cut in (circuit_cut(house),):
+    try:
+        cuts = (circuit_cut(house),)
+    except ConfigError:
+        cuts = ()
+    for cut in cuts:
         for inp, sig in cut.bindings.items():
             out.setdefault(sig, []).append(f"cut '{cut.name}' (binds {inp}; all of "
                                            f"{', '.join(cut.bindings.values())} needed)")
-    for s in CIRCUIT_INPUTS:
+    alone = _alone(house)
+    for s in CIRCUIT_INPUTS if alone else ():
         out.setdefault(s, []).append("the mixing station replayed alone (needs the circuit cut and "
                                      f"{', '.join(CIRCUIT_INPUTS)}): compares {', '.join(CIRCUIT_OUTPUTS[:2])}")
-    for s in RADIATOR_INPUTS:
+    for s in RADIATOR_INPUTS if alone else ():
         out.setdefault(s, []).append("the radiator circuit replayed alone (needs the circuit cut and "
                                      f"{', '.join(RADIATOR_INPUTS)}): compares {', '.join(RADIATOR_OUTPUTS)}")
     out.setdefault("weather.T_air", []).append("checked against the twin's weather profile; drives the "
                                                "room only in the whole-house replay (no cut)")
-    out.setdefault("zone.T_room", []).append("compared in the whole-house replay; with the circuit cut the "
-                                             "room is outside the replayed plant")
+    for zone in (s.split(".", 1)[0] for cut in cuts for s in cut.removes):
+        if f"{zone}.T_room" in roles_of(house).catalogue:
+            out.setdefault(f"{zone}.T_room", []).append("compared in the whole-house replay; with the circuit cut "
+                                                        "the room is outside the replayed plant")
     return {s: "; ".join(v) for s, v in out.items()}
 
 

@@ -206,14 +206,13 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     on the return of the radiator replayed alone (replayer given) it is fitted jointly with the
     radiator's rating and water content and judged on that return alone (Result.local). only: fit
     on that signal alone (a sensor effect fitted again on another model's reading)."""
-    from ..catalogue import CATALOGUE
     from .cut import RADIATOR_OUTPUTS
 
     tried = []
     nfev = 0
     alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
-        if CATALOGUE.signal(s).unit not in effect.signal_units or (only is not None and s != only):
+        if ctx.unit(s) not in effect.signal_units or (only is not None and s != only):
             continue
         one, k = _try_signal(effect, ctx, nominal_sim, replayer, j, s in alone)
         nfev += k

@@ -6,7 +6,6 @@ import warnings
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 from ..units import UNITS
 from ..water import CP, RHO
 from .context import MISMATCH_TOL
@@ -70,7 +69,7 @@ def ashrae_hourly(ctx, sim: np.ndarray, mask: np.ndarray) -> dict:
             continue
         cv = 100.0 * math.sqrt(float(np.sum(e_h ** 2)) / (nh - ASHRAE_P)) / abs(mean)
         nmbe = 100.0 * float(np.sum(e_h)) / ((nh - ASHRAE_P) * mean)
-        unit = CATALOGUE.signal(s).unit
+        unit = ctx.unit(s)
         out[s] = {"hours": nh, "cvrmse_pct": cv, "nmbe_pct": nmbe,
                   "meets_guideline_14": (cv <= ASHRAE_CV_MAX and abs(nmbe) <= ASHRAE_NMBE_MAX)
                   if unit != "degC" else None}
@@ -119,7 +118,7 @@ def beyond_tolerance(ctx, sim: np.ndarray, mask: np.ndarray) -> list[str]:
     for s in ctx.measured:
         if s not in m:
             continue
-        if CATALOGUE.signal(s).unit == "degC":
+        if ctx.unit(s) == "degC":
             if abs(m[s]["bias"]) > MODEL_TOL_K:
                 out.append(s)
         elif s in g and not within_accuracy(ctx, s, g[s]):
@@ -128,7 +127,7 @@ def beyond_tolerance(ctx, sim: np.ndarray, mask: np.ndarray) -> list[str]:
 
 
 def subsystems(ctx, sim: np.ndarray, mask: np.ndarray, mismatched: list[str]) -> list[dict]:
-    """Where the mismatch sits: per subsystem (cut.SUBSYSTEM) its share of the normalised
+    """Where the mismatch sits: per subsystem (roles.py) its share of the normalised
     squared error, its signals with a mismatch, and the operating mode it concentrates in."""
     r = ctx.residual(sim)
     n = len(r)
@@ -138,7 +137,7 @@ def subsystems(ctx, sim: np.ndarray, mask: np.ndarray, mismatched: list[str]) ->
     total = float(np.nansum(per)) or 1e-12
     groups: dict = {}
     for j, s in enumerate(ctx.measured):
-        groups.setdefault(subsystem(s), []).append(j)
+        groups.setdefault(subsystem(s, ctx.roles), []).append(j)
     out = []
     for name, idx in groups.items():
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
@@ -180,7 +179,7 @@ def mismatched_signals(ctx, sim, mask, tol: float = MISMATCH_TOL, tol_rms: float
         own = 0.0 if s in ctx.calibrated else 1.0
         lim = ctx.limit(j, own * tol)
         lim_rms = ctx.limit(j, own * tol_rms)
-        transient = CATALOGUE.signal(s).unit == "degC" and m[s]["rmse"] > lim_rms
+        transient = ctx.unit(s) == "degC" and m[s]["rmse"] > lim_rms
         if abs(m[s]["bias"]) > lim or m[s]["robust"] > lim or transient:
             out.append(s)
     return out
@@ -276,7 +275,7 @@ def heat_signal(ctx, comp: str) -> str:
     through the same instrument (a unit's own heat counter, chp.Q_flow_meter, reads its pump's
     flow only; a heat meter in the branch, chp.Q_flow, reads all of it)."""
     for name in (f"{comp}.Q_flow_meter", f"{comp}.Q_flow"):
-        if name in CATALOGUE and ctx.rec.has(name):
+        if name in ctx.roles.catalogue and ctx.rec.has(name):
             return name
     return f"{comp}.Q_flow"
 
@@ -290,7 +289,7 @@ def _heat(ctx, rows_or_meas, kind: str, comp: str, mask=None):
         dt = np.where(mask[: len(dt)], dt, 0.0)
     def get(name):
         if kind == "sim":
-            return rows_or_meas[:, CATALOGUE.index(name)]
+            return rows_or_meas[:, ctx.index(name)]
         return ctx.rec.data.get(name)
     q = get(heat_signal(ctx, comp))
     if q is None and kind == "meas":
@@ -306,7 +305,7 @@ def energy(ctx, nominal_rows, fitted_rows=None, mask=None) -> dict:
     """Heat per generator/consumer and storage energy change: measured vs simulated (mask: the
     samples integrated, e.g. ctx.held; the storage change is only reported for the whole)."""
     out = {}
-    for comp in ("chp", "boiler", "mixer", "dhw_pump"):
+    for comp in (u.name for u in (*ctx.roles.generators, *ctx.roles.circuits, *ctx.roles.chargers)):
         meas = _heat(ctx, None, "meas", comp, mask)
         if meas is None:
             continue
@@ -318,14 +317,14 @@ def energy(ctx, nominal_rows, fitted_rows=None, mask=None) -> dict:
             d["simulated_after_kWh"] = after
             d["error_after_pct"] = 100 * (after - meas) / abs(meas) if abs(meas) > 1e-6 else None
         out[comp] = d
-    names = [f"storage.T_sensor_{i}" for i in range(1, 11)]
-    if mask is None and all(ctx.rec.has(n) for n in names):
-        mass = RHO * 0.8
+    _, volume, names = ctx.roles.buffer or (None, 0.0, ())
+    if mask is None and names and all(ctx.rec.has(n) for n in names):
+        mass = RHO * volume
         def dE(T):
             T = np.asarray(T)
             return float(mass * CP * (np.nanmean(T[-1]) - np.nanmean(T[0])) / KWH)
         meas = dE(np.column_stack([ctx.rec.data[n] for n in names])[[0, -1]])
-        idx = [CATALOGUE.index(n) for n in names]
+        idx = [ctx.index(n) for n in names]
         d = {"measured_kWh": meas, "simulated_before_kWh": dE(nominal_rows[[0, -1]][:, idx])}
         if fitted_rows is not None:
             d["simulated_after_kWh"] = dE(fitted_rows[[0, -1]][:, idx])

@@ -11,7 +11,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from ..catalogue import CATALOGUE
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, requirements, search, unit_modes
 from . import report as report_mod
 from . import verdict as verdict_mod
@@ -93,7 +92,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     first = rp.run()
     warnings = list(p.warnings) + rp.notes + rp.boundary_check(first.rows)
     # a unit's own modes the twin lacks (a boiler's lock-out) are not scored (unit_modes.py)
-    modes = unit_modes.identify(ctx.rec, first.rows, CATALOGUE.index, rp.roles.ran)
+    modes = unit_modes.identify(ctx.rec, first.rows, ctx.index, rp.roles.ran)
     ctx = unit_modes.apply(ctx, modes)
     nref, ranges, nominal = {"parameters": [], "params": []}, {}, first
     if refit_nominal:
@@ -189,7 +188,7 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
     # in the catalogue's order: the fit keeps them in a set's, which differs between runs
     rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]])
                                     for sig, h in sorted(b.nominal.heights.items(),
-                                                         key=lambda kv: CATALOGUE.index(kv[0]))}
+                                                         key=lambda kv: rp.roles.catalogue.index(kv[0]))}
     report_mod.flag_bounds(rep, list(s.results))
     return rep
 

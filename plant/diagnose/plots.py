@@ -6,7 +6,6 @@ import math
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 
 
 PLOT_AXES = 3      # unit axes per subsystem plot: temperatures, flows, powers
@@ -36,7 +35,7 @@ def write_plots(rep, out, ctx, nominal_rows, best) -> dict:
             a.plot(t[sel], nominal_rows[sel, ctx.cols[j]], lw=0.8, label="twin (nominal)")
             if after is not None:
                 a.plot(t[sel], after[sel, j], lw=0.8, ls="--", label=f"twin + {best.id}")
-            a.set_ylabel(f"{s} [{CATALOGUE.signal(s).unit}]", fontsize=8)
+            a.set_ylabel(f"{s} [{ctx.unit(s)}]", fontsize=8)
             a.legend(fontsize=7, ncol=3)
         ax[-1, 0].set_xlabel("hours since recording start")
         fig.suptitle("whole recording" if wi == 0 else f"located window {wi}: {w['start_h']:.1f}-{w['end_h']:.1f} h")
@@ -59,17 +58,23 @@ def heldout_error(ctx, sim, mask) -> dict:
     return {s: float(z[j]) for j, s in enumerate(ctx.measured) if np.isfinite(ctx.meas[:, j]).any()}
 
 
-def plot_axes(signals, mismatched, err) -> list[dict]:
+def plot_axes(signals, mismatched, err, unit=None) -> list[dict]:
     """A subsystem plot's axes [{unit, signals}]: its mismatched signals (all of them when none
     is), per catalogue unit the PLOT_PER_AXIS with the largest held-out error, the unit with the
-    largest error on top. err: {signal: held-out error}; a signal not in it is not plotted."""
+    largest error on top. err: {signal: held-out error}; a signal not in it is not plotted;
+    unit: signal -> its unit (Context.unit; None: house 1's catalogue)."""
+    if unit is None:
+        from .roles import of
+
+        unit = lambda s: of().catalogue.signal(s).unit  # noqa: E731
+
     def rank(s):
         return err[s] if math.isfinite(err[s]) else -1.0  # never scored held-out: last
 
     pool = [s for s in (mismatched or signals) if s in err] or [s for s in signals if s in err]
     by_unit: dict = {}
     for s in sorted(pool, key=lambda s: -rank(s)):
-        by_unit.setdefault(CATALOGUE.signal(s).unit, []).append(s)
+        by_unit.setdefault(unit(s), []).append(s)
     return [{"unit": u, "signals": sig[:PLOT_PER_AXIS]} for u, sig in list(by_unit.items())[:PLOT_AXES]]
 
 
@@ -92,7 +97,7 @@ def subsystem_plots(rep, out, ctx, nominal_rows, best, plt) -> tuple[dict, dict]
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     files, specs = {}, {}
     for d in rep["locate"].get("subsystems", []):
-        axes = plot_axes(d["signals"], d["mismatched_signals"], err)
+        axes = plot_axes(d["signals"], d["mismatched_signals"], err, ctx.unit)
         if not axes:
             continue
         fig, ax = plt.subplots(len(axes), 1, figsize=(11, 0.9 + 2.3 * len(axes)), sharex=True, squeeze=False)

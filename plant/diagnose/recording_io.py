@@ -26,7 +26,6 @@ from profiles.recording import read_recording
 from profiles.recording import write_csv as write_table
 
 from .. import units as unit_table
-from ..catalogue import CATALOGUE
 from ..errors import ConfigError, DataError, closest
 
 # plausible range of a converted value per catalogue unit (catches e.g. Kelvin labelled degC)
@@ -65,8 +64,12 @@ class Samples:
 
 
 def load(path: str | Path, mapping: str | Path | None = None, start: str | None = None,
-         house_start: str = "2021-01-10") -> Samples:
-    """Read a recording (+ columns file) through profiles.recording; repair or reject bad input."""
+         house_start: str = "2021-01-10", house="house1") -> Samples:
+    """Read a recording (+ columns file) through profiles.recording; repair or reject bad input.
+    Its signals are `house`'s (a name or a house file: its catalogue names and units)."""
+    from .roles import of
+
+    cat = of(house).catalogue
     p = Path(path)
     warnings: list[str] = []
     run = p.is_dir() and (p / "signals.csv").exists()
@@ -76,9 +79,9 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     header = ["time"] + rec.names
     raw = np.column_stack([rec.time, rec.values])
     if mapping is None:
-        colmap, units = _catalogue_columns(p, rec, run, warnings)
+        colmap, units = _catalogue_columns(p, rec, run, warnings, cat)
     else:
-        colmap, units = _mapped_columns(p, rec, mapping, warnings)
+        colmap, units = _mapped_columns(p, rec, mapping, warnings, cat, house)
     start = start or rec.start
     if rec.dropped_rows:
         warnings.append(f"{rec.dropped_rows} row(s) with the wrong number of fields dropped")
@@ -91,22 +94,22 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
     raw, t = _repair_time(raw, raw[:, header.index("time")], warnings)
     transforms = rec.meta.get("columns", {}) if mapping is not None else {}
     ports = rec.meta.get("ports", {}) if mapping is not None else {}
-    _check_ports(ports, mapping)
-    data, heights = _convert_columns(raw, header, colmap, units, transforms, mapping, warnings)
+    _check_ports(ports, mapping, cat)
+    data, heights = _convert_columns(raw, header, colmap, units, transforms, mapping, warnings, cat)
     _check_places(heights, {sig: col for col, sig in colmap.items()}, mapping)
     valid = _gaps(t, warnings)
-    _hold_or_exclude_missing(data, warnings)
+    _hold_or_exclude_missing(data, warnings, cat)
     return Samples(str(p), str(start), t, data, warnings, valid,
                    {sig: col for col, sig in colmap.items()}, heights, ports)
 
 
-def _catalogue_columns(p: Path, rec, run: bool, warnings: list) -> tuple[dict, dict]:
+def _catalogue_columns(p: Path, rec, run: bool, warnings: list, cat) -> tuple[dict, dict]:
     """Without a columns file: the columns named like catalogue signals, in catalogue units ->
     ({column: signal}, {column: unit}). A run directory's other columns are named one warning
     each; any other recording must have a catalogue column, and the rest are listed in one."""
-    colmap = {n: n for n in rec.names if n in CATALOGUE}
-    units = {n: CATALOGUE.signal(n).unit for n in colmap}
-    ignored = [n for n in rec.names if n not in CATALOGUE]
+    colmap = {n: n for n in rec.names if n in cat}
+    units = {n: cat.signal(n).unit for n in colmap}
+    ignored = [n for n in rec.names if n not in cat]
     if run:
         warnings += [f"column {n!r}: not a catalogue signal; ignored" for n in ignored]
     elif not colmap:
@@ -116,18 +119,18 @@ def _catalogue_columns(p: Path, rec, run: bool, warnings: list) -> tuple[dict, d
     return colmap, units
 
 
-def _mapped_columns(p: Path, rec, mapping, warnings: list) -> tuple[dict, dict]:
+def _mapped_columns(p: Path, rec, mapping, warnings: list, cat, house) -> tuple[dict, dict]:
     """The columns file's [columns] and [units] checked against the catalogue and the recording
     -> ({column: signal}, {column: unit}). Every problem goes into one ConfigError, so that the
     file can be fixed in one go rather than one line per attempt."""
     colmap = {}
     problems = []
     for col, sig in rec.signals.items():
-        if sig not in CATALOGUE:
-            close = closest(sig, CATALOGUE.names, n=2)
+        if sig not in cat:
+            close = closest(sig, cat.names, n=2)
             problems.append(f"{mapping}: [columns] {col!r} = {sig!r}: unknown signal"
                             + (f"; did you mean {', '.join(close)}?" if close else
-                               "; list them with `twin signals house1`"))
+                               f"; list them with `twin signals {house}`"))
             continue
         if col not in rec.names:
             close = closest(col, rec.names, n=2)
@@ -135,7 +138,7 @@ def _mapped_columns(p: Path, rec, mapping, warnings: list) -> tuple[dict, dict]:
                             + (f"; did you mean {', '.join(close)}?" if close else ""))
             continue
         colmap[col] = sig
-    units = _mapped_units(rec, colmap, mapping, problems)
+    units = _mapped_units(rec, colmap, mapping, problems, cat)
     if problems:
         raise ConfigError("\n".join(problems))
     extra = [h for h in rec.names if h not in colmap]
@@ -145,13 +148,13 @@ def _mapped_columns(p: Path, rec, mapping, warnings: list) -> tuple[dict, dict]:
     return colmap, units
 
 
-def _mapped_units(rec, colmap: dict, mapping, problems: list) -> dict:
+def _mapped_units(rec, colmap: dict, mapping, problems: list, cat) -> dict:
     """{column: declared unit} for the mapped columns (the signal's catalogue unit where none is
     declared); an unknown unit or one of another kind than the signal's goes to problems."""
     units = {}
     for col, sig in colmap.items():
         u = rec.units.get(col)
-        cat_unit = CATALOGUE.signal(sig).unit
+        cat_unit = cat.signal(sig).unit
         if u is None:
             units[col] = cat_unit
             continue
@@ -186,9 +189,9 @@ def _repair_time(raw: np.ndarray, t: np.ndarray, warnings: list) -> tuple[np.nda
     return raw, t
 
 
-def _check_ports(ports: dict, mapping) -> None:
+def _check_ports(ports: dict, mapping, cat) -> None:
     """[ports] may only name storages the twin has (those with T_sensor_N signals)."""
-    storages = sorted({s.split(".", 1)[0] for s in CATALOGUE.names if ".T_sensor_" in s})
+    storages = sorted({s.split(".", 1)[0] for s in cat.names if ".T_sensor_" in s})
     for name in ports:
         if name not in storages:
             close = closest(name, storages, n=2)
@@ -197,20 +200,21 @@ def _check_ports(ports: dict, mapping) -> None:
 
 
 def _convert_columns(raw: np.ndarray, header: list, colmap: dict, units: dict, transforms: dict, mapping,
-                     warnings: list) -> tuple[dict, dict]:
+                     warnings: list, cat) -> tuple[dict, dict]:
     """Each mapped column in its signal's catalogue unit -> ({signal: values}, {signal: declared
     sensor height}); of two columns mapped onto one signal the later wins, with a warning."""
     data = {}
     heights = {}
     for col, sig in colmap.items():
         u = units[col]
-        cat_unit = CATALOGUE.signal(sig).unit
+        cat_unit = cat.signal(sig).unit
         tr = transforms.get(col, {})
         x = raw[:, header.index(col)]
         if "height" in tr:
-            if not (sig.startswith("storage.T_sensor_") or sig.startswith("dhw_storage.T_sensor_")):
+            if ".T_sensor_" not in sig:
+                storages = sorted({s.split(".", 1)[0] for s in cat.names if ".T_sensor_" in s})
                 raise ConfigError(f"{mapping}: [columns] {col!r} height: only for storage sensors "
-                                  "(storage.T_sensor_N, dhw_storage.T_sensor_N)")
+                                  f"({', '.join(f'{s}.T_sensor_N' for s in storages)})")
             heights[sig] = tr["height"]
         if "range" in tr:
             a, b, c, d = tr["range"]
@@ -264,13 +268,13 @@ def _gaps(t: np.ndarray, warnings: list) -> np.ndarray:
     return valid
 
 
-def _hold_or_exclude_missing(data: dict, warnings: list) -> None:
+def _hold_or_exclude_missing(data: dict, warnings: list, cat) -> None:
     """NaN samples in place: a command (causality input) is held at its last value, since the
     replay must be driven at every step; a measured signal keeps its NaN (excluded from scoring)."""
     for sig, v in data.items():
         nan = ~np.isfinite(v)
         if nan.any():
-            causality = CATALOGUE.signal(sig).causality
+            causality = cat.signal(sig).causality
             if causality == "input":
                 first = np.flatnonzero(~nan)
                 if first.size == 0:
@@ -301,10 +305,13 @@ def _check_places(heights: dict, columns: dict, mapping) -> None:
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,
               start: str | None = None, units: dict | None = None, columns: dict | None = None) -> None:
     """Write samples as CSV (+ columns file); columns {signal: user column} renames them."""
+    from .roles import of
+
+    cat = of().catalogue  # house 1's: the recordings the truth model writes
     names = list(data)
     cols = [(columns or {}).get(n, n) for n in names]
     write_table(path, time, {c: data[n] for c, n in zip(cols, names)})
     if mapping_path:
         write_columns(mapping_path, dict(zip(cols, names)),
-                      {c: (units or {}).get(n, CATALOGUE.signal(n).unit) for c, n in zip(cols, names)},
+                      {c: (units or {}).get(n, cat.signal(n).unit) for c, n in zip(cols, names)},
                       start=start)

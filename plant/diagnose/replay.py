@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
 from . import pipe_sensor, sensor_height
@@ -160,9 +159,9 @@ class Replayer:
         inputs = set(self.bound)
         simulated = []
         for s in cat:
-            if s.name in CATALOGUE:
+            if s.name in self.roles.catalogue:
                 self._src.append(s.index)
-                self._dst.append(CATALOGUE.index(s.name))
+                self._dst.append(self.roles.catalogue.index(s.name))
                 if s.name not in inputs and s.causality == "output":
                     simulated.append(s.name)
         if self.circuit:
@@ -287,18 +286,18 @@ class Replayer:
             raise ConfigError(f"replay on {self.plant_label}: override(s) {', '.join(lost)} address instances the "
                               f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
         rows_plant = self._plant(plant_ov, n)
-        out = np.full((n, len(CATALOGUE)), np.nan)
+        out = np.full((n, len(self.roles.catalogue)), np.nan)
         out[:, self._dst] = rows_plant
         for inp, sig in self.bound.items():
-            out[:, CATALOGUE.index(sig)] = self.rec.data[sig][:n]
+            out[:, self.roles.catalogue.index(sig)] = self.rec.data[sig][:n]
         if self.circuit:
             for sig, v in self._alone("mixer.", sub_ov, n, cut_mod.replay_circuit).items():
-                out[:, CATALOGUE.index(sig)] = v
+                out[:, self.roles.catalogue.index(sig)] = v
         if self.radiator:
             for sig, v in self._alone("radiator.", sub_ov, n, cut_mod.replay_radiator,
                                       self.radiator_elements).items():
-                out[:, CATALOGUE.index(sig)] = v
-        cols = {s: CATALOGUE.index(s) for s in self.simulated | set(self.bound.values())}
+                out[:, self.roles.catalogue.index(sig)] = v
+        cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
         t_fit = t_fit if self.t_train is not None else None
         pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes)
@@ -377,7 +376,7 @@ class Replayer:
             if not self.rec.has(b):
                 continue
             m = self.rec.data[b][: len(rows)]
-            sim = rows[:, CATALOGUE.index(b)]
+            sim = rows[:, self.roles.catalogue.index(b)]
             ok = np.isfinite(m) & np.isfinite(sim)
             if not ok.any():
                 continue

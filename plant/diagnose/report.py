@@ -7,7 +7,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 from . import locate
 from . import plots as plots_mod
 from .cut import subsystem
@@ -21,8 +20,8 @@ def _rms(ctx, sim, mask, signals):
     return float(math.sqrt(np.nanmean(mse))) if idx else math.nan
 
 
-def _unit(signal: str) -> str:
-    u = CATALOGUE.signal(signal).unit
+def _unit(ctx, signal: str) -> str:
+    u = ctx.unit(signal)
     return "K" if u == "degC" else u
 
 
@@ -30,8 +29,8 @@ def _rms_by_unit(ctx, sim0, after, mask, signals) -> dict:
     """Held-out RMSE of the affected signals, one figure per unit (an RMSE over K and W together
     means nothing)."""
     out = {}
-    for u in dict.fromkeys(_unit(s) for s in signals):
-        sig = [s for s in signals if _unit(s) == u]
+    for u in dict.fromkeys(_unit(ctx, s) for s in signals):
+        sig = [s for s in signals if _unit(ctx, s) == u]
         out[u] = {"signals": sig, "before": _rms(ctx, sim0, mask, sig), "after": _rms(ctx, after, mask, sig)}
     return out
 
@@ -60,7 +59,7 @@ def build(ctx, house, nominal_rows, sim0, results, verdict, best, twins, explain
     after_rows = best.rows if (best is not None and best.rows is not None) else nominal_rows
     signals = _signal_figures(ctx, sim0, after)
     affected = _affected(ctx, sim0, after, best, loc["mismatched_signals"])
-    by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(s) != "K"))
+    by_unit = _rms_by_unit(ctx, sim0, after, ctx.held, sorted(affected, key=lambda s: _unit(ctx, s) != "K"))
     energy, energy_held = _energies(ctx, nominal_rows, after_rows, best)
     rep = {
         "schema": SCHEMA,
@@ -114,13 +113,13 @@ def _signal_figures(ctx, sim0, after) -> dict:
         if s not in mb_all:
             continue
         g14 = {"before": gb.get(s), "after": ga.get(s)}
-        signals[s] = {"unit": CATALOGUE.signal(s).unit,
+        signals[s] = {"unit": ctx.unit(s),
                       "rmse_before": mb_all[s]["rmse"], "rmse_after": ma_all[s]["rmse"],
                       "heldout_rmse_before": mb_h.get(s, {}).get("rmse"),
                       "heldout_rmse_after": ma_h.get(s, {}).get("rmse"),
                       "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
                       "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"],
-                      "subsystem": subsystem(s), "guideline_14_hourly": g14}
+                      "subsystem": subsystem(s, ctx.roles), "guideline_14_hourly": g14}
     return signals
 
 

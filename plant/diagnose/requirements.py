@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 from ..errors import ConfigError
 from . import cut as cut_mod
 from . import roles as roles_mod
@@ -18,8 +17,9 @@ NOT_COMPARED_UNITS = ("J", "h", "1", "V", "W/m2")
 
 def comparable(house="house1") -> list[str]:
     """Measured plant outputs a recording can be compared on (temperatures, flows, powers)."""
-    unmeasured = roles_mod.of(house).unmeasured
-    return [s.name for s in CATALOGUE if s.causality == "output" and s.name not in BOUNDARY
+    roles = roles_mod.of(house)
+    unmeasured = roles.unmeasured
+    return [s.name for s in roles.catalogue if s.causality == "output" and s.name not in BOUNDARY
             and s.unit not in NOT_COMPARED_UNITS and s.name not in unmeasured]
 
 
@@ -52,16 +52,35 @@ def check_house(house) -> None:
 
 
 def requirements(house="house1") -> dict:
+    """What a recording of `house` must hold, for any house file: its commands, the measured
+    signals per subsystem, and per cut what it must measure to be replayed there."""
     roles = roles_mod.of(house)
+    per: dict = {}
+    for s in comparable(house):
+        per.setdefault(roles.subsystem(s), []).append(s)
     return {
         "commands (required; replayed into the twin)": list(roles.commands),
-        "accepted substitutes (with a warning)": dict(roles.substitutes),
-        "boundary conditions (optional; taken from the twin's profiles by date, checked if present)": list(BOUNDARY),
+        "accepted substitutes (with a warning)": {k: f"or {v}" for k, v in roles.substitutes.items()},
+        "boundary conditions (optional; taken from the twin's profiles by date, checked if present)":
+            [b for b in BOUNDARY if b in roles.catalogue],
         "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
-        "measured signals (compared; at least one required)": comparable(house),
+        "measured signals per subsystem (compared; at least one required)": per,
+        "cuts (what a recording must measure to be replayed without the twin's building and profiles)":
+            cut_mod.cuts_needed(house),
         "measured boundaries (optional; what each signal enables)": [
             f"{sig} -> {what}" for sig, what in cut_mod.requirements(house).items()],
     }
+
+
+def lines(req: dict) -> list[str]:
+    """requirements() as text, one line per entry."""
+    out = []
+    for k, v in req.items():
+        out.append(f"{k}:")
+        items = v.items() if isinstance(v, dict) else [(x, None) for x in v]
+        out += [f"  {name}" + (f": {', '.join(sub) if isinstance(sub, list) else sub}" if sub else "")
+                for name, sub in items]
+    return out
 
 
 def check(rec, house="house1") -> list[str]:
@@ -84,14 +103,12 @@ def check(rec, house="house1") -> list[str]:
             missing.append(c)
     measured = [s for s in comparable(house) if rec.has(s)]
     if missing or not measured:
-        lines = []
+        problems = []
         if missing:
-            lines.append("recording lacks the command(s) replay needs: " + ", ".join(missing))
+            problems.append("recording lacks the command(s) replay needs: " + ", ".join(missing))
         if not measured:
-            lines.append("recording has no measured signal to compare")
-        req = requirements(house)
-        lines.append("a recording for replay must contain:")
-        for k, v in req.items():
-            lines.append(f"  {k}: {', '.join(v) if isinstance(v, list) else v}")
-        raise ConfigError("\n".join(lines))
+            problems.append("recording has no measured signal to compare")
+        problems.append("a recording for replay must contain:")
+        problems += ["  " + line for line in lines(requirements(house))]
+        raise ConfigError("\n".join(problems))
     return warnings

@@ -47,6 +47,12 @@ class Roles:
     commands: tuple           # inputs the house's controllers write, in their instances' order
     substitutes: dict         # command -> the output a recording may give instead
     unmeasured: frozenset     # outputs never compared
+    catalogue: object = None  # the house's SignalCatalogue: the replay's columns, every signal's unit
+    buffer: tuple | None = None  # (storage, volume m3, its sensors): the first storage a coupling point feeds
+    subsystems: dict | None = None  # instance -> the subsystem the report localises a mismatch in
+
+    def subsystem(self, signal: str) -> str:
+        return (self.subsystems or {}).get(signal.split(".", 1)[0], "other")
 
     def modes(self) -> dict:
         """Mode flag -> its words in the report."""
@@ -99,6 +105,7 @@ class Roles:
 @lru_cache(maxsize=32)
 def of(house="house1") -> Roles:
     """The roles of `house` (a name or a house file)."""
+    from ..compiler import catalogue_of
     from ..declaration import load
 
     spec = load(house)
@@ -126,4 +133,44 @@ def of(house="house1") -> Roles:
     commands = tuple(sorted(dict.fromkeys(written), key=lambda s: order.get(s.split(".", 1)[0], len(order))))
     substitutes = {f"{i.name}.{a}": f"{i.name}.{b}" for i in inst for a, b in KINDS[i.kind].SUBSTITUTES.items()}
     unmeasured = frozenset(f"{i.name}.{o}" for i in inst for o in KINDS[i.kind].UNMEASURED)
-    return Roles(str(house), generators, circuits, chargers, commands, substitutes, unmeasured)
+    fed = [i for i in inst if i.kind == "storage" and any(j.options.get("storage") == i.name and
+                                                         "storage_top" in j.options for j in inst)]
+    buffer = None
+    if fed:
+        b = fed[0]
+        n = b.options.get("sensors", 10) if isinstance(b.options.get("sensors"), int) else 10
+        buffer = (b.name, float(b.params.volume), tuple(f"{b.name}.T_sensor_{k}" for k in range(1, n + 1)))
+    return Roles(str(house), generators, circuits, chargers, commands, substitutes, unmeasured,
+                 catalogue_of(house), buffer, _subsystems(inst))
+
+
+def _subsystems(inst) -> dict:
+    """Instance -> subsystem, by kind and role: the generators; the coupling point (its headers,
+    valves); the storage a coupling point or valve feeds, hot water (a storage only a coil or a
+    draw reaches, its coil and draw); the heating circuit (station and emitter); the room; the
+    solar loop; the ground source; the substation."""
+    fed = {i.options.get("storage") for i in inst if "storage_top" in i.options or i.kind == "branch"}
+    out = {}
+    for i in inst:
+        role = KINDS[i.kind].role
+        if i.kind == "substation":
+            out[i.name] = "substation"
+        elif role == "generator":
+            out[i.name] = "generators"
+        elif i.kind in ("coupling_point", "header", "branch"):
+            out[i.name] = "coupling point"
+        elif role == "storage" or role == "heater":
+            out[i.name] = "storage" if (i.name if role == "storage" else i.options.get("storage")) in fed else "hot water"
+        elif i.kind in ("coil", "dhw_draw", "dhw_coil_draw"):
+            out[i.name] = "hot water"
+        elif i.kind == "mixing_station" or role == "emitter":
+            out[i.name] = "heating circuit"
+        elif role == "zone":
+            out[i.name] = "room"
+        elif i.kind == "solar_collector":
+            out[i.name] = "solar"
+        elif role == "source":
+            out[i.name] = "ground source"
+        elif i.kind == "pv":
+            out[i.name] = "PV"
+    return out

@@ -10,11 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..catalogue import CATALOGUE
 
 
 def features(ctx, rows: np.ndarray) -> dict[str, np.ndarray]:
-    g = lambda n: rows[:, CATALOGUE.index(n)]  # noqa: E731
+    g = lambda n: rows[:, ctx.index(n)]  # noqa: E731
     f = ctx.flags
     n = len(rows)
     on = {k: v[:n].astype(float) for k, v in f.items()}

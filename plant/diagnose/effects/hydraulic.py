@@ -1,7 +1,6 @@
 """Hydraulic candidates: flow through the idle CHP, pump coupling, valve leakage."""
 from __future__ import annotations
 
-from ...catalogue import CATALOGUE
 from ...components.generator import Mode
 from .base import Effect, Param, register
 
@@ -58,13 +57,13 @@ class IdleGeneratorFlow(Effect):
         if sim is None:
             return None, None, None
         n = len(sim)
-        mode = sim[:, CATALOGUE.index("chp.mode")]
+        mode = sim[:, ctx.index("chp.mode")]
         sel = (self._idle_mask(ctx)[:n] & ((mode < Mode.IDLE + 0.5) | (mode > Mode.RUN_ON + 0.5))
-               & (sim[:, CATALOGUE.index("boiler.m_flow")] <= 0.0)
-               & (sim[:, CATALOGUE.index("mixer.m_flow_primary")] > 0.02))
+               & (sim[:, ctx.index("boiler.m_flow")] <= 0.0)
+               & (sim[:, ctx.index("mixer.m_flow_primary")] > 0.02))
         if sel.sum() < 10:
             return None, None, None
-        m, prim = sim[:, CATALOGUE.index("chp.m_flow")][sel], sim[:, CATALOGUE.index("mixer.m_flow_primary")][sel]
+        m, prim = sim[:, ctx.index("chp.m_flow")][sel], sim[:, ctx.index("mixer.m_flow_primary")][sel]
         return float(m.mean()), float(m.sum() / prim.sum()), float(prim.mean())
 
     def _suction(self, theta, ctx, sim):
@@ -73,7 +72,7 @@ class IdleGeneratorFlow(Effect):
         sel = ctx.mode_mask("chp_on_boiler_on")[: len(sim)]
         if sel.sum() < 10:
             return None
-        return float(sim[:, CATALOGUE.index("chp.m_flow")][sel].mean()), float(theta[1] * sim[:, CATALOGUE.index("boiler.m_flow")][sel].mean())
+        return float(sim[:, ctx.index("chp.m_flow")][sel].mean()), float(theta[1] * sim[:, ctx.index("boiler.m_flow")][sel].mean())
 
     def size(self, theta, ctx, sim=None):
         m, share, prim = self._flow(theta, ctx, sim)
@@ -129,7 +128,7 @@ class PumpCoupling(Effect):
         if sim is not None:
             sel = ctx.mode_mask("boiler_on")
             if sel.any():
-                flow = sim[:, CATALOGUE.index("boiler.m_flow")][sel].mean()
+                flow = sim[:, ctx.index("boiler.m_flow")][sel].mean()
                 txt += f" ({theta[0] * flow:.3f} kg/s while the boiler runs)"
         return txt
 
@@ -155,7 +154,7 @@ class ValveLeakage(Effect):
             return True, ""
         rows = ctx.nominal.rows
         on = ctx.mode_mask("heating_on")[: len(rows)]
-        closed = on & (rows[:, CATALOGUE.index("mixer.y_valve")] < 0.05)
+        closed = on & (rows[:, ctx.index("mixer.y_valve")] < 0.05)
         if closed.sum() < 0.02 * len(rows):
             return False, ("the replayed mixing valve is (almost) never closed while the pump runs, "
                            "so a seat leak cannot show")
