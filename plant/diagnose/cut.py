@@ -76,7 +76,7 @@ def select(rec, house: str, required: bool = False):
                               f"columns (`twin diagnose --requirements {house}` lists what each enables), or leave "
                               "out --require-cut to replay the whole house on the twin's building and profiles")
         return None, False
-    circuit = "mixer" in cut.removes and all(rec.has(s) for s in CIRCUIT_INPUTS)
+    circuit = "mixer" in cut.removes and _alone(house) and all(rec.has(s) for s in CIRCUIT_INPUTS)
     return cut, circuit
 
 

@@ -235,14 +235,16 @@ def windows(ctx, sim: np.ndarray, top: int = 5, hours: float = 1.0) -> list[dict
 
 
 def modes(ctx, sim: np.ndarray, mask: np.ndarray | None = None) -> list[dict]:
-    """Error concentration per operating mode (combinations of CHP/boiler/heating/DHW state)."""
+    """Error concentration per operating mode (combinations of the generators', the heating and
+    the charging pumps' states)."""
     r = ctx.residual(sim)
     n = len(r)
     mask = np.ones(n, bool) if mask is None else mask[:n]
     z = np.nan_to_num((r / ctx.scale) ** 2)
     tot = z.mean(axis=1)
     f = ctx.flags
-    keys = ("chp_on", "boiler_on", "heating_on", "dhw_on")
+    keys = [k for k in (*(f"{g.name}_on" for g in ctx.roles.generators), "heating_on", "dhw_on") if k in f]
+    words = ctx.modes
     code = sum((f[k][:n].astype(int) << i) for i, k in enumerate(keys))
     out = []
     total = float(tot[mask].sum()) or 1e-12
@@ -252,12 +254,8 @@ def modes(ctx, sim: np.ndarray, mask: np.ndarray | None = None) -> list[dict]:
         if time_share < 0.01:
             continue
         err_share = float(tot[sel].sum() / total)
-        name = ", ".join(("" if (c >> i) & 1 else "not ") + k.replace("_on", "") + " on"
+        name = ", ".join(words[k] if (c >> i) & 1 else words[k][: -len(" on")] + " off"
                          for i, k in enumerate(keys))
-        name = name.replace("not chp on", "CHP off").replace("chp on", "CHP on")
-        name = name.replace("not boiler on", "boiler off").replace("not heating on", "heating pump off")
-        name = name.replace("heating on", "heating pump on").replace("not dhw on", "DHW charging off")
-        name = name.replace("dhw on", "DHW charging on")
         bias = {}
         for j, s in enumerate(ctx.measured):
             e = r[sel, j]

@@ -16,6 +16,7 @@ import os
 import threading
 from concurrent.futures import ProcessPoolExecutor
 
+from ..errors import ConfigError
 from . import fit
 
 _JOB: dict = {}
@@ -49,9 +50,15 @@ def map_forked(fn, n: int, jobs: int | None = None) -> list:
 
 
 def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
-    """fit.fit_simulate for each effect; in up to `jobs` forked processes."""
+    """fit.fit_simulate for each effect; in up to `jobs` forked processes. A candidate whose
+    values the replayed house refuses (a plume beyond half of a smaller tank) comes back unfitted
+    with the house's reason; the others go on."""
     def one(i):
-        return dataclasses.replace(fit.fit_simulate(effects[i], ctx, rp, J0t, nominal), effect=None)
+        e = effects[i]
+        try:
+            return dataclasses.replace(fit.fit_simulate(e, ctx, rp, J0t, nominal), effect=None)
+        except ConfigError as exc:
+            return fit.Result(e.id, e.component, e.kind, False, f"the replayed house refuses its values: {exc}")
 
     out = map_forked(one, len(effects), jobs)
     return [dataclasses.replace(r, effect=e) for e, r in zip(effects, out)]

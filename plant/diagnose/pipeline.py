@@ -15,6 +15,7 @@ from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, 
 from . import report as report_mod
 from . import verdict as verdict_mod
 from .context import Context
+from ..declaration import load
 from .effects import catalogue
 
 
@@ -132,7 +133,12 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
     each is independent); an implausible one comes back unfitted with its reason."""
     ctx, rp = b.ctx, b.replayer
     results, todo = [], []
+    present = set(load(rp.house_name).instances)
     for e in (effects if effects is not None else catalogue()):
+        if e.component and e.component not in present:  # written for an instance this house lacks
+            results.append(fit.Result(e.id, e.component, e.kind, False,
+                                      f"{rp.house_name} has no {e.component}", effect=e))
+            continue
         ok, why = e.plausible(ctx) if e.available else (False, e.description)
         if not ok:
             results.append(fit.Result(e.id, e.component, e.kind, False, why, effect=e))

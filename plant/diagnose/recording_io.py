@@ -49,7 +49,7 @@ class Samples:
     def sensor_overrides(self) -> dict:
         """House overrides that put the twin's storage sensors where the recording's are."""
         out = {}
-        for storage in ("storage", "dhw_storage"):
+        for storage in sorted({s.split(".", 1)[0] for s in self.heights}):
             mine = {int(s.rsplit("_", 1)[1]): h for s, h in self.heights.items() if s.startswith(storage + ".")}
             if mine:
                 n = max(10, max(mine))
@@ -139,6 +139,12 @@ def _mapped_columns(p: Path, rec, mapping, warnings: list, cat, house) -> tuple[
             continue
         colmap[col] = sig
     units = _mapped_units(rec, colmap, mapping, problems, cat)
+    owners = {n.split(".", 1)[0] for n in cat.names}
+    foreign = sorted({s.split(".", 1)[0] for s in rec.signals.values() if s not in cat} - owners)
+    if foreign:
+        problems.insert(0, f"{mapping}: its columns name instances {house} does not have ({', '.join(foreign)}): "
+                           "a recording of another house? Give its own house file (--house), or map the columns "
+                           f"onto {house}'s signals (`twin signals {house}`)")
     if problems:
         raise ConfigError("\n".join(problems))
     extra = [h for h in rec.names if h not in colmap]
@@ -303,11 +309,12 @@ def _check_places(heights: dict, columns: dict, mapping) -> None:
 
 
 def write_csv(path: str | Path, time: np.ndarray, data: dict, mapping_path: str | Path | None = None,
-              start: str | None = None, units: dict | None = None, columns: dict | None = None) -> None:
-    """Write samples as CSV (+ columns file); columns {signal: user column} renames them."""
+              start: str | None = None, units: dict | None = None, columns: dict | None = None,
+              house="house1") -> None:
+    """Write samples of `house` as CSV (+ columns file); columns {signal: user column} renames them."""
     from .roles import of
 
-    cat = of().catalogue  # house 1's: the recordings the truth model writes
+    cat = of(house).catalogue
     names = list(data)
     cols = [(columns or {}).get(n, n) for n in names]
     write_table(path, time, {c: data[n] for c, n in zip(cols, names)})

@@ -23,32 +23,14 @@ def comparable(house="house1") -> list[str]:
             and s.unit not in NOT_COMPARED_UNITS and s.name not in unmeasured]
 
 
-#: the house the diagnosis knows: its commands, modes, cuts and effects are written for it
-KNOWN_HOUSE = "house1"
-
-
 def check_house(house) -> None:
-    """Refuse a house the diagnosis cannot replay, before anything is read against house 1's
-    signals. It replays any house file that declares house 1's diagnosed instances under the
-    same names and kinds (house 1 with other parameters, sizes or sensors); the diagnosis of
-    other plants (roles declared by the kinds, cuts derived per house) is issue #28."""
+    """Refuse a house the diagnosis cannot replay (an FMU-backed one), before a recording is read."""
     from ..house import load_spec
 
     spec = load_spec(house)
-    where = getattr(spec, "path", house)
     if not hasattr(spec, "instances"):
-        raise ConfigError(f"{where}: the diagnosis replays native houses only; this house's plant is an "
-                          "FMU ([house] topology = \"fmu\"): diagnose the native house it was exported from")
-    known = load_spec(KNOWN_HOUSE).instances
-    used = {n.split(".", 1)[0] for n in (*roles_mod.of(KNOWN_HOUSE).commands, *BOUNDARY, *comparable())} & set(known)
-    missing = sorted(f"{n} ({known[n].kind})" for n in used
-                     if n not in spec.instances or spec.instances[n].kind != known[n].kind)
-    if missing:
-        raise ConfigError(
-            f"{where}: the diagnosis knows {KNOWN_HOUSE}'s plant only and this house lacks its "
-            f"diagnosed instance(s) {', '.join(missing)} (name and kind); diagnose a recording of "
-            f"{KNOWN_HOUSE} or of a house file that keeps those instances (`twin diagnose "
-            f"--requirements {KNOWN_HOUSE}` lists what a recording needs)")
+        raise ConfigError(f"{getattr(spec, 'path', house)}: the diagnosis replays native houses only; this house's "
+                          "plant is an FMU ([house] topology = \"fmu\"): diagnose the native house it was exported from")
 
 
 def requirements(house="house1") -> dict:
@@ -84,8 +66,15 @@ def lines(req: dict) -> list[str]:
 
 
 def check(rec, house="house1") -> list[str]:
-    """Reject a recording that lacks what replay needs; returns warnings for substitutions."""
+    """Reject a recording that lacks what replay needs, or holds signals the house does not have
+    (a recording of another house); returns warnings for substitutions."""
     roles = roles_mod.of(house)
+    alien = [s for s in rec.data if s not in roles.catalogue]
+    if alien:
+        raise ConfigError(f"{rec.source}: the recording holds signals {house} does not have: "
+                          f"{', '.join(alien[:6])}{' ...' if len(alien) > 6 else ''}: a recording of another "
+                          f"house? Diagnose it with its own house file (--house), or map its columns onto "
+                          f"{house}'s signals (`twin diagnose --requirements {house}`)")
     run = {u.command: u.on_above for u in (*roles.generators, *roles.circuits, *roles.chargers)}
     warnings = []
     missing = []

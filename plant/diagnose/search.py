@@ -12,6 +12,18 @@ import numpy as np
 
 
 
+# the terms are written for house 1's plant (a CHP and a boiler on a switch, a mixing station):
+# the signals and modes they read
+NEEDS = ("storage.T_sensor_1", "storage.T_sensor_10", "mixer.m_flow_primary", "boiler.m_flow", "chp.m_flow",
+         "switch.T_sup", "switch.T_ret", "weather.T_air")
+NEEDS_MODES = ("chp_on", "chp_off", "boiler_on", "heating_on", "dhw_on", "chp_off_heating_on")
+
+
+def applies(ctx) -> bool:
+    """Whether the replayed house has what the terms read."""
+    return all(n in ctx.roles.catalogue for n in NEEDS) and all(m in ctx.flags for m in NEEDS_MODES)
+
+
 def features(ctx, rows: np.ndarray) -> dict[str, np.ndarray]:
     g = lambda n: rows[:, ctx.index(n)]  # noqa: E731
     f = ctx.flags
@@ -77,7 +89,10 @@ def _stepwise(X: dict, y: np.ndarray, train: np.ndarray, held: np.ndarray, k: in
 
 
 def search(ctx, rows: np.ndarray, signals: list[str], top: int = 3) -> list[dict]:
-    """Top residual terms per mismatched signal (level and rate form)."""
+    """Top residual terms per mismatched signal (level and rate form); none where the house lacks
+    what the terms read (applies)."""
+    if not applies(ctx):
+        return []
     X = features(ctx, rows)
     out = []
     for s in signals[:4]:

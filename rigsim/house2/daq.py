@@ -72,14 +72,13 @@ def _signal_name(c) -> str:
 
 
 def columns_toml(start: str, file: str = "recording.csv") -> str:
-    """The columns file a user writes: datasheet heights and ports (relative to the 1.60 m water
-    height of the channel list), units as logged, the channel list's ranges and scales."""
+    """The columns file a user writes: datasheet sensor heights (relative to the 1.60 m water
+    height of the channel list), units as logged, the channel list's ranges and scales. No
+    [ports]: the diagnosis's [ports] gives one upper and one lower connection per tank, and this
+    tank has five pairs (heat pump upper and lower, boiler, heating, draw); their datasheet
+    heights are the house file's."""
     H = DATASHEET["tank_height_m"]
-    ports = ", ".join(f"{k} = {v / H:.4f}" for k, v in DATASHEET["ports_m"].items())
-    lines = ["[recording]", f'start = "{start}"', f'file = "{file}"', 'time = "t_s"', "",
-             "[ports]", f"storage = {{ {ports} }}",
-             f"solar_coil = {{ inlet = {DATASHEET['coil_top_m'] / H:.4f}, "
-             f"outlet = {DATASHEET['coil_bottom_m'] / H:.4f} }}", "", "[columns]"]
+    lines = ["[recording]", f'start = "{start}"', f'file = "{file}"', 'time = "t_s"', "", "[columns]"]
     for c in CHANNELS:
         name, sig, unit = c["channel"], _signal_name(c), c["unit"]
         if name == "ASHP_A_V3_TL":

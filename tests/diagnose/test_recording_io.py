@@ -94,24 +94,25 @@ def test_requirements_cli(capsys):
     assert "chp.on" in out and "storage.T_sensor_10" in out
 
 
-def test_a_house_the_diagnosis_does_not_know_is_refused_before_its_recording_is_read(tmp_path, rec, capsys):
-    # house 2 (air-source heat pump, floor heating, no CHP): its signals would all be called
-    # unknown against house 1's catalogue; the error names the house, what it lacks and the fix
+def test_a_recording_of_another_house_is_refused_naming_the_fix(tmp_path, rec, capsys):
+    # a house-1 recording given with house 2's file (air-source heat pump, floor heating, no
+    # CHP): its columns are read against house 2's catalogue; the error says so and names the fix
     from cli.main import main
     from plant.diagnose import diagnose
 
     csv, m = _write(tmp_path, rec)
     assert main(["diagnose", "--house", "house2", "--recording", str(csv), "--map", str(m)]) != 0
     err = capsys.readouterr().err
-    assert "house2.toml" in err and "chp (chp)" in err and "radiator (radiator)" in err
-    assert "--requirements house1" in err and "unknown signal" not in err
+    assert "name instances house2 does not have (chp, dhw_pump, dhw_storage): a recording of another house?" in err
+    assert "(--house)" in err and "twin signals house2" in err and "'chp.T_sup' = 'chp.T_sup': unknown signal" in err
     # what a recording of house 3 must hold is said from its own roles and derived cut
     assert main(["diagnose", "--requirements", "house3"]) == 0
     out = capsys.readouterr().out
     assert "heat_pump.on" in out and "solar.upper" in out and "chp.on" not in out
     assert "ground source: ground.T_ground" in out and "heating circuit: mixer.T_sup" in out
     assert "all of mixer.m_flow, mixer.T_sup, mixer.T_ret, dhw.m_flow_hot (replaces mixer, floor, zone" in out
-    with pytest.raises(ConfigError, match="house5.toml.*dhw_pump \\(coil\\)"):
+    # the same recording, already read, given to the diagnosis with house 5's file
+    with pytest.raises(ConfigError, match="holds signals house5 does not have: dhw_pump.on.*a recording of another house"):
         diagnose(rec, house="house5")
 
 

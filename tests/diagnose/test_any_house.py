@@ -1,0 +1,46 @@
+"""The diagnosis on houses other than house 1: house 2's recording from the clean-room rig
+simulator, and a house file written for this test (not shipped), each through its derived cut
+and its own roles."""
+import numpy as np
+
+from plant.diagnose import diagnose, recording_io
+from plant.diagnose.roles import of as roles_of
+from plant.house import load_house
+from plant.housefile import HOUSES
+
+
+def test_a_house2_rig_recording_gets_a_verdict_on_house2s_own_terms(tmp_path):
+    from rigsim.house2.suite import make_case
+
+    make_case("null_a", tmp_path, days=1.0, start="2021-01-10", realisation=0)
+    d = tmp_path / "null_a"
+    rec = recording_io.load(d, d / "columns.toml", house="house2")
+    rep = diagnose(rec, house="house2", log=lambda *a: None, plots=False, jobs=1)
+    assert rep["verdict"] in ("no_missing_physics", "missing_physics", "unexplained_mismatch")
+    assert rep["locate"]["replay"]["plant"] == "house2_cut_circuit"
+    assert rep["locate"]["replay"]["boundaries"]["mixer.T_return"] == "mixer.T_ret"
+    words = {m["mode"] for m in rep["locate"]["modes"]}
+    assert any("heat pump on" in w for w in words) and not any("CHP" in w for w in words)
+    skipped = {c["id"]: c.get("reason", "") for c in rep["candidates"] if not c.get("fitted")}
+    assert "house2 has no chp" in skipped.get("idle_generator_flow", "")
+    assert "heat_pump" in rep["energy"] and "chp" not in rep["energy"]
+
+
+def test_a_house_file_written_for_the_test_is_diagnosed_on_its_own_recording(tmp_path):
+    """house 4's plant with a smaller boiler under another name: the twin's own day of it,
+    recorded every minute, is replayed through the derived cut and blamed on nothing."""
+    path = tmp_path / "small_boiler.toml"
+    path.write_text(f'[house]\nname = "small_boiler"\nbase = "{HOUSES / "house4.toml"}"\n[boiler]\nP_nom = 16000.0\n')
+    house = load_house(path, start="2021-01-12")
+    t, rows = house.run(86400.0, dt=1.0, out_interval=60.0)
+    roles = roles_of(path)
+    keep = list(roles.commands) + [s for s in ("boiler.T_sup", "boiler.T_ret", "boiler.m_flow", "boiler.Q_flow",
+                                               "mixer.m_flow", "mixer.T_sup", "mixer.T_ret", "zone.T_room")]
+    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
+    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
+    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house=path)
+    rec = recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house=path)
+    rep = diagnose(rec, house=str(path), log=lambda *a: None, plots=False, jobs=1)
+    assert rep["locate"]["replay"]["plant"] == "small_boiler_cut_circuit"
+    assert rep["verdict"] == "no_missing_physics", (rep["verdict"], rep["locate"]["mismatched_signals"])
+    assert np.isfinite(rep["energy"]["boiler"]["error_before_pct"])
