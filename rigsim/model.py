@@ -100,6 +100,68 @@ def _cell_UA(n, d, H, UA):
     return UA * a / a.sum()
 
 
+def coil_weights(n, dz, H, top, bottom, shift, length_factor, n_seg):
+    """Weights [n_seg, n] (each row sums to 1) of the cells of a column (n cells of height dz,
+    water height H) that each segment of a coil lies over, segments from the coil's top (its
+    inlet) down: the datasheet coil (top, bottom) shifted by shift and stretched by
+    length_factor about its middle, clipped to the water column."""
+    c_mid = 0.5 * (bottom + top) + shift
+    c_len = (top - bottom) * length_factor
+    c_top = min(H, c_mid + c_len / 2)
+    seg_h = c_len / n_seg
+    edges = np.arange(n + 1) * dz
+    W = np.zeros((n_seg, n))
+    for k in range(n_seg):
+        hi = c_top - k * seg_h
+        lo = max(0.0, hi - seg_h)
+        w = np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None)
+        W[k] = w / w.sum()
+    return W
+
+
+def pipe_sensors(nz, names, cp=CP):
+    """Heat capacity [J/K] of the pipe water around each named pipe sensor (the realisation's
+    water mass, 30 % added for the pipe wall) and its loss coefficient [W/K] from its cooling
+    time constant."""
+    C = np.array([nz["pipe_sensor_water_kg"][k] * cp * 1.3 for k in names])
+    UA = np.array([C[i] / (60.0 * nz["pipe_cooling_tau_min"][k]) for i, k in enumerate(names)])
+    return C, UA
+
+
+def sample_grid(spinup_days, days, dt, jitter_seed, rng_key=()):
+    """The steps and the logger's time stamps: spin-up [s], the first logged step, the number of
+    steps (the window and 2 s), the minutes of inputs needed from the spin-up's start, the time
+    stamps t_s (one a minute, +-0.5 s jitter drawn from jitter_seed and rng_key) and the step
+    of each stamp."""
+    spin = spinup_days * 86400.0
+    log_step = int(round(spin / dt))
+    n_steps = log_step + int(round(days * 86400.0 / dt)) + int(round(2.0 / dt))
+    n_min = int((spin + days * 86400.0) / 60.0) + 4
+    n_samp = int(round(days * 1440))
+    rng = np.random.default_rng([int(jitter_seed), 7, *rng_key])
+    t_s = 60.0 * np.arange(n_samp) + rng.uniform(-0.5, 0.5, n_samp)
+    t_s[0] = abs(t_s[0])
+    t_s = np.round(t_s, 3)
+    sample_steps = log_step + np.round(t_s / dt).astype(np.int64)
+    return spin, log_step, n_steps, n_min, t_s, sample_steps
+
+
+def effects_from(e, eff: dict, fields: dict, what: str = "effect"):
+    """Fill the Effects e from a case's effects: fields maps each effect the house knows to the
+    attribute it sets and the key of its value (e.attribute = float(value[key])); the sensor_*
+    effects name their channel too, one for all of a case's."""
+    for name, a in eff.items():
+        if name not in fields:
+            raise ValueError(f"unknown {what} {name!r}")
+        if name.startswith("sensor_"):
+            if e.sensor_tag not in (None, a["tag"]):
+                raise ValueError("sensor effects of one case must share one channel")
+            e.sensor_tag = a["tag"]
+        attr, key = fields[name]
+        setattr(e, attr, float(a[key]))
+    return e
+
+
 def _radiator_K(Q_N, m_N, T_in, T_room, n_nodes, n_exp):
     """Per-node coefficient K [W/K^n] so that n_nodes in series give Q_N at the nominal point."""
 
@@ -142,33 +204,16 @@ class Effects:
 
     @classmethod
     def from_dict(cls, eff: dict) -> "Effects":
-        e = cls()
-        for name, a in eff.items():
-            if name == "idle_flow":
-                e.idle_k = float(a["k"])
-            elif name == "storage_UA":
-                e.storage_UA = float(a["W_per_K"])
-            elif name == "plume_litres":
-                e.plume_litres = float(a["litres"])
-            elif name in ("sensor_lag", "sensor_offset", "sensor_delay"):
-                if e.sensor_tag not in (None, a["tag"]):
-                    raise ValueError("sensor effects of one case must share one channel")
-                e.sensor_tag = a["tag"]
-                if name == "sensor_lag":
-                    e.lag_s = float(a["tau_s"])
-                elif name == "sensor_offset":
-                    e.offset_K = float(a["offset_K"])
-                else:
-                    e.delay_s = float(a["delay_s"])
-            elif name == "valve_leak":
-                e.valve_leak = float(a["share"])
-            elif name == "coil_factor":
-                e.coil_factor = float(a["factor"])
-            elif name == "boiler_heat_factor":
-                e.boiler_heat_factor = float(a["factor"])
-            else:
-                raise ValueError(f"unknown effect {name!r}")
-        return e
+        return effects_from(cls(), eff, _EFFECT_FIELDS)
+
+
+_EFFECT_FIELDS = {   # effect: (Effects attribute, key of its value)
+    "idle_flow": ("idle_k", "k"), "storage_UA": ("storage_UA", "W_per_K"),
+    "plume_litres": ("plume_litres", "litres"), "sensor_lag": ("lag_s", "tau_s"),
+    "sensor_offset": ("offset_K", "offset_K"), "sensor_delay": ("delay_s", "delay_s"),
+    "valve_leak": ("valve_leak", "share"), "coil_factor": ("coil_factor", "factor"),
+    "boiler_heat_factor": ("boiler_heat_factor", "factor"),
+}
 
 
 @dataclass
@@ -222,17 +267,8 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     d_sens_pos = np.array(nz["dhw_sensor_heights_m"]) / dz_d
     d_sens_tau = np.array(nz["dhw_sleeve_tau_s"])
     # coil: N_COIL_SEG segments from its top (inlet) down, each over its own height band
-    c_mid = 0.5 * (DATASHEET["coil_bottom_m"] + DATASHEET["coil_top_m"]) + nz["coil_shift_m"]
-    c_len = (DATASHEET["coil_top_m"] - DATASHEET["coil_bottom_m"]) * nz["coil_length_factor"]
-    c_top = c_mid + c_len / 2
-    seg_h = c_len / N_COIL_SEG
-    coil_W = np.zeros((N_COIL_SEG, nd))
-    edges = np.arange(nd + 1) * dz_d
-    for k in range(N_COIL_SEG):
-        hi = c_top - k * seg_h
-        lo = hi - seg_h
-        w = np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None)
-        coil_W[k] = w / w.sum()
+    coil_W = coil_weights(nd, dz_d, H_d, DATASHEET["coil_top_m"], DATASHEET["coil_bottom_m"],
+                          nz["coil_shift_m"], nz["coil_length_factor"], N_COIL_SEG)
     P[core.I_C_SEG] = (DATASHEET["coil_volume_l"] * CP + 10.0 * 460.0) / N_COIL_SEG
     P[core.I_UA_SEG] = nz["coil_UA_W_per_K"] * effects.coil_factor / N_COIL_SEG
     # ---- generators ----
@@ -257,9 +293,7 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     P[core.I_BOI_ETAMAX] = 1.05
     P[core.I_BOI_TMAX] = 82.0
     # ---- pipes with sensors, headers ----
-    names = ["CHP_TVL", "CHP_TRL", "CB_TVL", "CB_TRL"]
-    p_C = np.array([nz["pipe_sensor_water_kg"][k] * CP * 1.3 for k in names])
-    p_UA = np.array([p_C[i] / (60.0 * nz["pipe_cooling_tau_min"][k]) for i, k in enumerate(names)])
+    p_C, p_UA = pipe_sensors(nz, ["CHP_TVL", "CHP_TRL", "CB_TVL", "CB_TRL"])
     P[core.I_C_SH] = nz["supply_header_l"] * CP * 1.2
     P[core.I_C_RH] = nz["return_header_l"] * CP * 1.2
     P[core.I_UA_HDR] = 1.5
@@ -313,18 +347,10 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     bsu = table("WolfCGB14_StartUp.txt", "StartUp")
 
     # ---- time ----
-    spin = spinup_days * 86400.0
-    log_step = int(round(spin / dt))
-    n_log = int(round(days * 86400.0 / dt))
-    n_steps = log_step + n_log + int(round(2.0 / dt))
-    n_min = int((spin + days * 86400.0) / 60.0) + 4
+    spin, log_step, n_steps, n_min, t_s, sample_steps = sample_grid(spinup_days, days, dt,
+                                                                    jitter_seed)
     inp = minute_inputs(seconds_of_year(start) - spin, n_min)
-    n_samp = int(round(days * 1440))
-    rng = np.random.default_rng([int(jitter_seed), 7])
-    t_s = 60.0 * np.arange(n_samp) + rng.uniform(-0.5, 0.5, n_samp)
-    t_s[0] = abs(t_s[0])
-    t_s = np.round(t_s, 3)
-    sample_steps = log_step + np.round(t_s / dt).astype(np.int64)
+    n_samp = t_s.size
 
     # ---- initial state ----
     Tb = np.linspace(45.0, 70.0, nb)

@@ -15,8 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from . import daq
-from .model import Effects, draw_nuisance, simulate
+from . import daq, model
 
 
 def _case(description, effects=None, expected=None, sizes=None, start_offset_days=0, seed=0):
@@ -96,26 +95,37 @@ def _start_of(case: dict, start: str) -> str:
 def make_case(case: str, out, days: float = 7.0, start: str = "2021-01-10",
               realisation: int = 0) -> dict:
     """Simulate one case and write out/<case>/{recording.csv, columns.toml, meta.json}."""
-    if case not in CASES:
-        raise KeyError(f"unknown case {case!r}; known: {', '.join(CASES)}")
-    c = CASES[case]
+    return run_case(CASES, case, out, days, start, realisation, model, daq)
+
+
+def run_case(cases: dict, case: str, out, days: float, start: str, realisation: int, hmodel, hdaq,
+             house: str | None = None, seed_offset: int = 0) -> dict:
+    """Simulate one case of a house's suite and write out/<case>/{recording.csv, columns.toml,
+    meta.json}: hmodel is the house's model module (draw_nuisance, Effects, simulate), hdaq its
+    DAQ module (apply_daq, write_csv, columns_toml); house the --house that makes the case
+    (None: house 1, the default), seed_offset keeps the house's seeds apart from house 1's."""
+    if case not in cases:
+        what = "case" if house is None else f"{house} case"
+        raise KeyError(f"unknown {what} {case!r}; known: {', '.join(cases)}")
+    c = cases[case]
     t0 = time.perf_counter()
-    nuisance = draw_nuisance(realisation)
-    effects = Effects.from_dict(c["effects"])
+    nuisance = hmodel.draw_nuisance(realisation)
+    effects = hmodel.Effects.from_dict(c["effects"])
     case_start = _start_of(c, start)
-    case_index = list(CASES).index(case)
-    seed = 1000 * int(realisation) + 17 * case_index + 7919 * c["seed"]
-    res = simulate(nuisance, effects, start=case_start, days=days, jitter_seed=seed)
-    data = daq.apply_daq(res.rec, seed)
+    case_index = list(cases).index(case)
+    seed = 1000 * int(realisation) + 17 * case_index + 7919 * c["seed"] + seed_offset
+    res = hmodel.simulate(nuisance, effects, start=case_start, days=days, jitter_seed=seed)
+    data = hdaq.apply_daq(res.rec, seed)
     d = Path(out) / case
     d.mkdir(parents=True, exist_ok=True)
-    daq.write_csv(d / "recording.csv", res.t_s, data)
-    (d / "columns.toml").write_text(daq.columns_toml(case_start), encoding="utf-8")
+    hdaq.write_csv(d / "recording.csv", res.t_s, data)
+    (d / "columns.toml").write_text(hdaq.columns_toml(case_start), encoding="utf-8")
     wall = time.perf_counter() - t0
-    cmd = (f"python -m rigsim.suite --out {out} --realisation {realisation} --days {days:g} "
-           f"--start {start} --case {case}")
+    cmd = (f"python -m rigsim.suite{'' if house is None else ' --house ' + house} --out {out} "
+           f"--realisation {realisation} --days {days:g} --start {start} --case {case}")
     meta = {
         "simulator": "rigsim",
+        **({} if house is None else {"house": house}),
         "case": case,
         "description": c["description"],
         "realisation": int(realisation),
@@ -125,7 +135,7 @@ def make_case(case: str, out, days: float = 7.0, start: str = "2021-01-10",
         "effects": c["effects"],
         "expected": list(c["expected"]),
         "sizes": dict(c["sizes"]),
-        "effect_size": res.effect_size,
+        "effect_size": {k: float(v) for k, v in res.effect_size.items()},
         "ledger": {k: float(v) for k, v in res.ledger.items()},
         "ledger_closure": float(res.closure),
         "rows": int(len(res.t_s)),

@@ -61,9 +61,9 @@ def dhwcalc_minutes(file: str = "SF1_wholeyear_Vdot.txt") -> np.ndarray:
     return flow
 
 
-def channel_list() -> list[dict]:
-    """The lab's DAQ channel list (house1-channels.csv), t_s first."""
+def channel_list(file: str = "house1-channels.csv") -> list[dict]:
+    """A DAQ channel list (house 1's lab: house1-channels.csv), t_s first."""
     import csv
 
-    with open(DATA / "house1-channels.csv", encoding="utf-8") as fh:
+    with open(DATA / file, encoding="utf-8") as fh:
         return [dict(r) for r in csv.DictReader(fh)]

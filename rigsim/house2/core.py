@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..tank import at_height, interp1, tank_multi  # house 1's column, lookups and sensor heights
+
 CP = 4180.0
 
 # ---- parameter vector P -------------------------------------------------------------------
@@ -117,64 +119,28 @@ FS_NAMES = _FS.split()
 N_FS = 14
 
 
-@njit(cache=True)
-def interp1(x, xp, fp):
-    n = xp.size
-    if x <= xp[0]:
-        return fp[0]
-    if x >= xp[n - 1]:
-        return fp[n - 1]
-    lo = 0
-    hi = n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if xp[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    w = (x - xp[lo]) / (xp[hi] - xp[lo])
-    return fp[lo] + w * (fp[hi] - fp[lo])
+@njit(cache=True, inline="always")
+def _bracket(x, xs):
+    """The interval i of grid xs that holds x and x's weight in it (edge values held beyond)."""
+    n = xs.size
+    if x <= xs[0]:
+        return 0, 0.0
+    if x >= xs[n - 1]:
+        return n - 2, 1.0
+    i = 0
+    while xs[i + 1] < x:
+        i += 1
+    return i, (x - xs[i]) / (xs[i + 1] - xs[i])
 
 
 @njit(cache=True)
 def interp2(x, y, xs, ys, Z):
     """Bilinear in a grid Z[len(xs), len(ys)], edge values held beyond the grid."""
-    nx, ny = xs.size, ys.size
-    if x <= xs[0]:
-        i, wx = 0, 0.0
-    elif x >= xs[nx - 1]:
-        i, wx = nx - 2, 1.0
-    else:
-        i = 0
-        while xs[i + 1] < x:
-            i += 1
-        wx = (x - xs[i]) / (xs[i + 1] - xs[i])
-    if y <= ys[0]:
-        j, wy = 0, 0.0
-    elif y >= ys[ny - 1]:
-        j, wy = ny - 2, 1.0
-    else:
-        j = 0
-        while ys[j + 1] < y:
-            j += 1
-        wy = (y - ys[j]) / (ys[j + 1] - ys[j])
+    i, wx = _bracket(x, xs)
+    j, wy = _bracket(y, ys)
     a = Z[i, j] + wy * (Z[i, j + 1] - Z[i, j])
     b = Z[i + 1, j] + wy * (Z[i + 1, j + 1] - Z[i + 1, j])
     return a + wx * (b - a)
-
-
-@njit(cache=True)
-def at_height(T, pos):
-    """Temperature at a position in cell units (cell j's centre at j + 0.5)."""
-    x = pos - 0.5
-    n = T.size
-    if x <= 0.0:
-        return T[0]
-    if x >= n - 1:
-        return T[n - 1]
-    j = int(x)
-    w = x - j
-    return T[j] + w * (T[j + 1] - T[j])
 
 
 @njit(cache=True, inline="always")
@@ -189,48 +155,6 @@ def chain(T, C, m, T_in, Q, UA, T_env, dt):
     """Implicit update of one chain node: returns (T_new, loss rate [W] at T_new)."""
     Tn = (C * T + dt * (m * CP * T_in + Q + UA * T_env)) / (C + dt * (m * CP + UA))
     return Tn, UA * (Tn - T_env)
-
-
-@njit(cache=True)
-def tank_multi(T, M, dt, S, SE, R, kcond, UA, T_env, extra_Q, dE):
-    """One explicit step of the storage column with inflows S [kg/s] carrying SE [kg/s * degC]
-    and outflows R [kg/s] per cell (sum S = sum R), extra_Q [W] per cell. Returns the standing
-    loss [W]."""
-    n = T.size
-    F = 0.0
-    loss = 0.0
-    for j in range(n):
-        Fup = F + S[j] - R[j]
-        e = SE[j] - R[j] * T[j]
-        if F > 0.0:
-            e += F * T[j - 1]
-        else:
-            e += F * T[j]
-        if j < n - 1:
-            if Fup > 0.0:
-                e -= Fup * T[j]
-            else:
-                e -= Fup * T[j + 1]
-        ql = UA[j] * (T[j] - T_env)
-        loss += ql
-        q = CP * e + extra_Q[j] - ql
-        if j > 0:
-            q += kcond * (T[j - 1] - T[j])
-        if j < n - 1:
-            q += kcond * (T[j + 1] - T[j])
-        dE[j] = q
-        F = Fup
-    c = dt / (M * CP)
-    for j in range(n):
-        T[j] += dE[j] * c
-    for j in range(1, n):
-        v = T[j]
-        k = j - 1
-        while k >= 0 and T[k] > v:
-            T[k + 1] = T[k]
-            k -= 1
-        T[k + 1] = v
-    return loss
 
 
 @njit(cache=True)
@@ -568,7 +492,7 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         R[k_boi_out] += m_b
         R[k_hc_out] += m_p
         R[k_hot] += q_hot
-        L_t = tank_multi(Tt, P[P_M_CELL], dt, S, SE, R, P[P_KCOND], t_UA, T_pl, Qt, dE)
+        L_t = tank_multi(Tt, P[P_M_CELL], dt, S, SE, R, P[P_KCOND], t_UA, T_pl, Qt, dE, CP)
 
         # ================= ledger =================
         if step >= log_step:

@@ -8,28 +8,20 @@ station's irradiances as logged (exact); then rounded to the channel's resolutio
 """
 from __future__ import annotations
 
-import csv
-import re
-
 import numpy as np
 
-from ..daq import _decimals
-from ..tables import DATA
+from .. import daq as _daq
+from .. import tables
 from . import core
 from .model import DATASHEET
 
 
 def channel_list() -> list[dict]:
-    with open(DATA / "house2-channels.csv", encoding="utf-8") as fh:
-        return [dict(r) for r in csv.DictReader(fh)]
+    """House 2's DAQ channel list (house2-channels.csv), t_s first."""
+    return tables.channel_list("house2-channels.csv")
 
 
-_ALL = channel_list()
-CHANNELS = [
-    {"channel": r["channel"], "unit": r["unit"], "resolution": float(r["resolution"]),
-     "signal": r["twin signal (for a columns file)"], "position": r["position or source"]}
-    for r in _ALL if r["channel"] != "t_s"
-]
+CHANNELS = _daq.channels_of(channel_list())
 NAMES = [c["channel"] for c in CHANNELS]
 if NAMES != core.CH_NAMES:
     raise RuntimeError("rigsim.house2.core.CH_NAMES differs from house2-channels.csv")
@@ -44,31 +36,11 @@ _HALF_PCT = {"HP_P_elec_is", "HP_COP", "CB_P_gas", "PV_P_gen", "P_elConsumption_
 
 def apply_daq(rec: np.ndarray, seed: int) -> np.ndarray:
     rng = np.random.default_rng([int(seed), 99, 2])
-    out = rec.copy()
-    for i, c in enumerate(CHANNELS):
-        name, x = c["channel"], out[:, i]
-        if name in _EXACT:
-            pass
-        elif c["unit"] == "°C":
-            x = x + rng.normal(0.0, 0.05, x.size)
-        elif name in _ONE_PCT:
-            x = x * (1.0 + rng.normal(0.0, 0.01, x.size))
-        elif name in _HALF_PCT:
-            x = x * (1.0 + rng.normal(0.0, 0.005, x.size))
-        res = c["resolution"]
-        out[:, i] = np.round(x / res) * res
-    return out
+    return _daq.add_noise(rec, rng, CHANNELS, _EXACT, _ONE_PCT, _HALF_PCT)
 
 
 def write_csv(path, t_s: np.ndarray, data: np.ndarray) -> None:
-    fmts = ["%.3f"] + [f"%.{_decimals(c['resolution'])}f" for c in CHANNELS]
-    table = np.column_stack([t_s, data])
-    table = np.where(table == 0.0, 0.0, table)
-    np.savetxt(path, table, delimiter=",", header=",".join(["t_s"] + NAMES), comments="", fmt=fmts)
-
-
-def _signal_name(c) -> str:
-    return re.split(r"\s*\(", c["signal"].strip().strip('"'))[0].strip()
+    _daq.write_csv(path, t_s, data, CHANNELS)
 
 
 def columns_toml(start: str, file: str = "recording.csv") -> str:
@@ -78,18 +50,18 @@ def columns_toml(start: str, file: str = "recording.csv") -> str:
     tank has five pairs (heat pump upper and lower, boiler, heating, draw); their datasheet
     heights are the house file's."""
     H = DATASHEET["tank_height_m"]
-    lines = ["[recording]", f'start = "{start}"', f'file = "{file}"', 'time = "t_s"', "", "[columns]"]
-    for c in CHANNELS:
-        name, sig, unit = c["channel"], _signal_name(c), c["unit"]
+
+    def entry(c):
+        name, unit = c["channel"], c["unit"]
         if name == "ASHP_A_V3_TL":
-            lines.append(f'"{name}" = {{ signal = "{sig}", range = [0, 1, 1, 0] }}')
-        elif name == "EB_EB_power_kW_set":
-            lines.append(f'"{name}" = {{ signal = "{sig}", range = [2, 20, 2, 10] }}')
-        elif name == "HP_P_elec_is":
-            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}", scale = -1 }}')
-        elif name.startswith("TS_S_TM_BT_"):
+            return "range = [0, 1, 1, 0]"
+        if name == "EB_EB_power_kW_set":
+            return "range = [2, 20, 2, 10]"
+        if name == "HP_P_elec_is":
+            return f'unit = "{unit}", scale = -1'
+        if name.startswith("TS_S_TM_BT_"):
             h = DATASHEET["sensor_heights_m"][int(name.rsplit("_", 1)[1]) - 1] / H
-            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}", height = {h:.4f} }}')
-        else:
-            lines.append(f'"{name}" = {{ signal = "{sig}", unit = "{unit}" }}')
-    return "\n".join(lines) + "\n"
+            return f'unit = "{unit}", height = {h:.4f}'
+        return None
+
+    return _daq.columns_file(start, file, CHANNELS, entry)

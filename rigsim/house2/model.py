@@ -4,15 +4,16 @@ Everything here follows docs/lab/house2-rig.md; the numerical core is rigsim/hou
 """
 from __future__ import annotations
 
-import datetime as _dt
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
-from ..model import _cell_UA, _window_weights
-from ..tables import DATA, read_text_tables, table
+from ..inputs import seconds_of_year
+from ..model import (Result, _cell_UA, _window_weights, coil_weights, effects_from, pipe_sensors,
+                     sample_grid)
+from ..tables import DATA, dhwcalc_minutes, read_text_tables, table
 from . import core
 
 CP = core.CP
@@ -99,46 +100,19 @@ class Effects:
 
     @classmethod
     def from_dict(cls, eff: dict) -> "Effects":
-        e = cls()
-        for name, a in eff.items():
-            if name == "heat_loss":
-                e.storage_UA = float(a["storage_UA_W_per_K"])
-            elif name in ("sensor_lag", "sensor_offset"):
-                if e.sensor_tag not in (None, a["tag"]):
-                    raise ValueError("sensor effects of one case must share one channel")
-                e.sensor_tag = a["tag"]
-                if name == "sensor_lag":
-                    e.lag_s = float(a["tau_s"])
-                else:
-                    e.offset_K = float(a["offset_K"])
-            elif name == "heat_pump_capacity":
-                e.capacity_factor = float(a["capacity_factor"])
-            elif name == "defrost_share":
-                e.defrost_share = float(a["defrost_share"])
-            elif name == "port_valve_leakage":
-                e.leak_share = float(a["leak_share"])
-            elif name == "collector_degradation":
-                e.eta0_factor = float(a["eta0_factor"])
-            elif name == "collector_loop_loss":
-                e.loop_UA = float(a["UA_W_per_K"])
-            elif name == "slab_capacity":
-                e.slab_factor = float(a["factor"])
-            elif name == "floor_rating_factor":
-                e.floor_rating_factor = float(a["factor"])
-            else:
-                raise ValueError(f"unknown house-2 effect {name!r}")
-        return e
+        return effects_from(cls(), eff, _EFFECT_FIELDS, "house-2 effect")
 
 
-@dataclass
-class Result:
-    t_s: np.ndarray
-    rec: np.ndarray
-    aux: np.ndarray
-    ledger: dict
-    closure: float
-    effect_size: dict = field(default_factory=dict)
-    final: dict = field(default_factory=dict)
+_EFFECT_FIELDS = {   # effect: (Effects attribute, key of its value)
+    "heat_loss": ("storage_UA", "storage_UA_W_per_K"), "sensor_lag": ("lag_s", "tau_s"),
+    "sensor_offset": ("offset_K", "offset_K"),
+    "heat_pump_capacity": ("capacity_factor", "capacity_factor"),
+    "defrost_share": ("defrost_share", "defrost_share"),
+    "port_valve_leakage": ("leak_share", "leak_share"),
+    "collector_degradation": ("eta0_factor", "eta0_factor"),
+    "collector_loop_loss": ("loop_UA", "UA_W_per_K"), "slab_capacity": ("slab_factor", "factor"),
+    "floor_rating_factor": ("floor_rating_factor", "factor"),
+}
 
 
 # ------------------------------------------------------------------ inputs
@@ -147,16 +121,7 @@ def _raw():
     w = table("Weather_2021_Munich_15min.txt", "Weather")
     pres = table("presenceResidential.txt", "presence")
     el = table("elPower.txt", "Pel")
-    tap = np.zeros(525600)
-    with open(DATA / "SF2_wholeyear_Vdot.txt") as fh:
-        for line in fh:
-            s = line.strip()
-            if s:
-                a, b = s.split(";")[:2]
-                k = int(b) - 1
-                if 0 <= k < tap.size:
-                    tap[k] = float(a)
-    return w, pres, el, tap
+    return w, pres, el, dhwcalc_minutes("SF2_wholeyear_Vdot.txt")
 
 
 def _sun(t_utc):
@@ -201,11 +166,6 @@ def minute_inputs(t0_abs: float, n_min: int) -> dict:
     g_win = 12.6 * (0.45 * E_dir + 0.5 * E_dif)
     return dict(T_out=T_out, E_dir=E_dir, E_dif=E_dif, G_abs=G_abs, G_tilt=G_tilt,
                 presence=presence, P_house=P_house, q_tap=q_tap, g_win=g_win)
-
-
-def seconds_of_year(date: str) -> int:
-    d = _dt.date.fromisoformat(date)
-    return (d - _dt.date(d.year, 1, 1)).days * 86400
 
 
 # ------------------------------------------------------------------ tables
@@ -283,17 +243,8 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     sens_pos = np.array(nz["sensor_heights_m"]) / dz
     sens_tau = np.array(nz["sleeve_tau_s"])
     # solar coil: N_COIL_SEG segments from its inlet (top) down
-    c_mid = 0.5 * (DATASHEET["coil_top_m"] + DATASHEET["coil_bottom_m"]) + nz["coil_shift_m"]
-    c_len = (DATASHEET["coil_top_m"] - DATASHEET["coil_bottom_m"]) * nz["coil_length_factor"]
-    c_top = min(H, c_mid + c_len / 2)
-    seg_h = c_len / N_COIL_SEG
-    edges = np.arange(n + 1) * dz
-    coil_W = np.zeros((N_COIL_SEG, n))
-    for k in range(N_COIL_SEG):
-        hi = c_top - k * seg_h
-        lo = max(0.0, hi - seg_h)
-        w = np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None)
-        coil_W[k] = w / w.sum()
+    coil_W = coil_weights(n, dz, H, DATASHEET["coil_top_m"], DATASHEET["coil_bottom_m"],
+                          nz["coil_shift_m"], nz["coil_length_factor"], N_COIL_SEG)
     setp("SOL_C_SEG", (DATASHEET["coil_volume_l"] * CP + 25.0 * 460.0) / N_COIL_SEG)
     setp("SOL_UA_SEG", nz["coil_UA_W_per_K"] / N_COIL_SEG)
     # ---- heat pump ----
@@ -349,9 +300,7 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     # ---- node capacities and sensor pipe water ----
     Cn = np.zeros(core.N_NODES)
     N = {name: i for i, name in enumerate(core.N_NAMES)}
-    pw, pt = nz["pipe_sensor_water_kg"], nz["pipe_cooling_tau_min"]
-    s_C = np.array([pw[k] * CP * 1.3 for k in PIPE_SENSORS])
-    s_UA = np.array([s_C[i] / (60.0 * pt[k]) for i, k in enumerate(PIPE_SENSORS)])
+    s_C, s_UA = pipe_sensors(nz, PIPE_SENSORS, CP)
     for i, nn in enumerate(["HP_VL", "HP_RL", "CB_VL", "CB_RL", "HC_VL", "HC_RL"]):
         Cn[N[nn]] = s_C[i]
     Cn[N["HP"]] = nz["hp_water_kg"] * CP + nz["hp_steel_kg"] * 460.0
@@ -370,17 +319,10 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     Cn[N["MASS"]] = 80e6
 
     # ---- time and inputs ----
-    spin = spinup_days * 86400.0
-    log_step = int(round(spin / dt))
-    n_steps = log_step + int(round(days * 86400.0 / dt)) + int(round(2.0 / dt))
-    n_min = int((spin + days * 86400.0) / 60.0) + 4
+    spin, log_step, n_steps, n_min, t_s, sample_steps = sample_grid(spinup_days, days, dt,
+                                                                    jitter_seed, (2,))
     inp = minute_inputs(seconds_of_year(start) - spin, n_min)
-    n_samp = int(round(days * 1440))
-    rng = np.random.default_rng([int(jitter_seed), 7, 2])
-    t_s = 60.0 * np.arange(n_samp) + rng.uniform(-0.5, 0.5, n_samp)
-    t_s[0] = abs(t_s[0])
-    t_s = np.round(t_s, 3)
-    sample_steps = log_step + np.round(t_s / dt).astype(np.int64)
+    n_samp = t_s.size
 
     # ---- initial state ----
     Tt = np.linspace(30.0, 58.0, n)

@@ -5,22 +5,10 @@
 """
 from __future__ import annotations
 
-import datetime as _dt
-import json
-import time
-from pathlib import Path
-
-from . import daq
-from .model import Effects, draw_nuisance, simulate
+from ..suite import _case, run_case
+from . import daq, model
 
 DEFAULT_START = "2021-01-10"
-
-
-def _case(description, effects=None, expected=None, sizes=None, start_offset_days=0, seed=0):
-    return {"description": description, "effects": effects or {},
-            "expected": expected or ["no_missing_physics"], "sizes": sizes or {},
-            "start_offset_days": start_offset_days, "seed": seed}
-
 
 APRIL = 100   # 2021-01-10 + 100 days = 2021-04-20: the solar loop runs on most days
 
@@ -72,51 +60,8 @@ CASES: dict[str, dict] = {
 }
 
 
-def _start_of(case: dict, start: str) -> str:
-    d = _dt.date.fromisoformat(start) + _dt.timedelta(days=case["start_offset_days"])
-    return d.isoformat()
-
-
 def make_case(case: str, out, days: float = 7.0, start: str = DEFAULT_START,
               realisation: int = 0) -> dict:
     """Simulate one house-2 case and write out/<case>/{recording.csv, columns.toml, meta.json}."""
-    if case not in CASES:
-        raise KeyError(f"unknown house-2 case {case!r}; known: {', '.join(CASES)}")
-    c = CASES[case]
-    t0 = time.perf_counter()
-    nuisance = draw_nuisance(realisation)
-    effects = Effects.from_dict(c["effects"])
-    case_start = _start_of(c, start)
-    case_index = list(CASES).index(case)
-    seed = 1000 * int(realisation) + 17 * case_index + 7919 * c["seed"] + 200003
-    res = simulate(nuisance, effects, start=case_start, days=days, jitter_seed=seed)
-    data = daq.apply_daq(res.rec, seed)
-    d = Path(out) / case
-    d.mkdir(parents=True, exist_ok=True)
-    daq.write_csv(d / "recording.csv", res.t_s, data)
-    (d / "columns.toml").write_text(daq.columns_toml(case_start), encoding="utf-8")
-    wall = time.perf_counter() - t0
-    cmd = (f"python -m rigsim.suite --house house2 --out {out} --realisation {realisation} "
-           f"--days {days:g} --start {start} --case {case}")
-    meta = {
-        "simulator": "rigsim",
-        "house": "house2",
-        "case": case,
-        "description": c["description"],
-        "realisation": int(realisation),
-        "start": case_start,
-        "days": days,
-        "nuisance": nuisance,
-        "effects": c["effects"],
-        "expected": list(c["expected"]),
-        "sizes": dict(c["sizes"]),
-        "effect_size": {k: float(v) for k, v in res.effect_size.items()},
-        "ledger": {k: float(v) for k, v in res.ledger.items()},
-        "ledger_closure": float(res.closure),
-        "rows": int(len(res.t_s)),
-        "generation_wall_s": round(wall, 3),
-        "command": cmd,
-    }
-    (d / "meta.json").write_text(json.dumps(meta, indent=2, ensure_ascii=False) + "\n",
-                                 encoding="utf-8")
-    return meta
+    return run_case(CASES, case, out, days, start, realisation, model, daq, house="house2",
+                    seed_offset=200003)

@@ -239,15 +239,4 @@ def test_solar_effects(apr):
     assert L.effect_size["solar_pump_hours"] > 0.8 * b.effect_size["solar_pump_hours"]
 
 
-def test_realisations_differ_and_reproduce(tmp_path):
-    a, b = draw_nuisance(0), draw_nuisance(1)
-    assert a != b and draw_nuisance(1) == b
-    m1 = suite.make_case("heat_loss_30", tmp_path / "x", days=0.1, realisation=3)
-    m2 = suite.make_case("heat_loss_30", tmp_path / "y", days=0.1, realisation=3)
-    assert m1["nuisance"] == m2["nuisance"]
-    assert ((tmp_path / "x/heat_loss_30/recording.csv").read_bytes()
-            == (tmp_path / "y/heat_loss_30/recording.csv").read_bytes())
-    m3 = suite.make_case("heat_loss_30", tmp_path / "z", days=0.1, realisation=4)
-    assert m3["nuisance"] != m1["nuisance"]
-    assert ((tmp_path / "x/heat_loss_30/recording.csv").read_bytes()
-            != (tmp_path / "z/heat_loss_30/recording.csv").read_bytes())
+# realisations (differ, reproduce): tests/rigsim/test_suite.py, for both houses

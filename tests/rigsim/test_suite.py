@@ -5,9 +5,10 @@ import tomllib
 
 import pytest
 
-from rigsim import suite
+from rigsim import model, suite
+from rigsim.house2 import model as model2
+from rigsim.house2 import suite as suite2
 from rigsim.daq import NAMES
-from rigsim.model import draw_nuisance
 from rigsim.tables import channel_list
 
 EXPECTED_IDS = {"no_missing_physics", "idle_generator_flow", "heat_loss", "storage_mixing",
@@ -72,14 +73,17 @@ def test_case_files_and_contract(case_dir):
     assert "rigsim.suite" in m["command"]
 
 
-def test_realisations_differ_and_reproduce(tmp_path):
-    a, b = draw_nuisance(0), draw_nuisance(1)
-    assert a != b
-    assert draw_nuisance(1) == b
-    m1 = suite.make_case("null_a", tmp_path / "x", days=0.1, realisation=3)
-    m2 = suite.make_case("null_a", tmp_path / "y", days=0.1, realisation=3)
+@pytest.mark.parametrize("m, s, case", [(model, suite, "null_a"), (model2, suite2, "heat_loss_30")],
+                         ids=["house1", "house2"])
+def test_realisations_differ_and_reproduce(tmp_path, m, s, case):
+    """Both houses' suites: a realisation reproduces its nuisance and recording, another differs."""
+    a, b = m.draw_nuisance(0), m.draw_nuisance(1)
+    assert a != b and m.draw_nuisance(1) == b
+    m1 = s.make_case(case, tmp_path / "x", days=0.1, realisation=3)
+    m2 = s.make_case(case, tmp_path / "y", days=0.1, realisation=3)
     assert m1["nuisance"] == m2["nuisance"]
-    assert ((tmp_path / "x/null_a/recording.csv").read_bytes()
-            == (tmp_path / "y/null_a/recording.csv").read_bytes())
-    m3 = suite.make_case("null_a", tmp_path / "z", days=0.1, realisation=4)
+    rec = {k: (tmp_path / k / case / "recording.csv").read_bytes() for k in "xy"}
+    assert rec["x"] == rec["y"]
+    m3 = s.make_case(case, tmp_path / "z", days=0.1, realisation=4)
     assert m3["nuisance"] != m1["nuisance"]
+    assert (tmp_path / "z" / case / "recording.csv").read_bytes() != rec["x"]
