@@ -135,7 +135,9 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
     results, todo = [], []
     present = set(load(rp.house_name).instances)
     for e in (effects if effects is not None else catalogue()):
-        if e.component and e.component not in present:  # written for an instance this house lacks
+        # a plant effect written for an instance this house lacks (a signal effect's component,
+        # "sensor", is whichever sensor it is fitted on)
+        if e.kind == "simulate" and e.component and e.component not in present:
             results.append(fit.Result(e.id, e.component, e.kind, False,
                                       f"{rp.house_name} has no {e.component}", effect=e))
             continue

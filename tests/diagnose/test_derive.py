@@ -9,6 +9,7 @@ from plant.diagnose.derive import derive
 from plant.errors import ConfigError
 from plant.house import load_house
 from plant.housefile import HOUSES, shipped
+from tests.plant.test_cut import _record
 
 STORAGE = [f"storage.T_sensor_{i}" for i in range(1, 11)] + [f"dhw_storage.T_sensor_{i}" for i in range(1, 11)]
 HOURS = 6
@@ -29,16 +30,6 @@ def _declared(house, rename=None):
 
     return [(ren(i.name), i.kind, i.params, {k: opts(v) for k, v in i.options.items()})
             for i in load(house).instances.values()]
-
-
-def _record(house, names, hours):
-    idx = [house.catalogue.index(n) for n in names]
-    t, cols = [], []
-    for _ in range(hours):
-        ti, rows = house.run(3600.0, dt=1.0, out_interval=1.0)
-        t.append(ti)
-        cols.append(rows[:, idx])
-    return np.concatenate(t), np.concatenate(cols)
 
 
 @pytest.mark.parametrize("side, shipped_file, rename", [
