@@ -49,12 +49,21 @@ SLOW_FIRST = (
 
 # Files whose tests run on one worker, one after the other. Each file of "helics" starts HELICS
 # districts (a broker and its federates on loopback, some of them paced in real time), so two
-# districts never share the machine's ports or its time at once.
+# districts never share the machine's ports or its time at once; "phil" likewise for the PHIL
+# closed loops.
 SAME_WORKER = {
     "tests/district/test_federation.py": "helics",
     "tests/district/test_canopen_district.py": "helics",
     "tests/district/test_two_hosts.py": "helics",
     "tests/e2e/test_c_libmodbus_district.py": "helics",
+    # the PHIL closed loops pace a twin and its bench processes against the clock: one at a time
+    "tests/phil/test_loop.py": "phil",
+    "tests/phil/test_served.py": "phil",
+    "tests/phil/test_brine.py": "phil",
+    "tests/phil/test_variants.py": "phil",
+    "tests/phil/test_grid.py": "phil",
+    "tests/phil/test_canopen_link.py": "phil",
+    "tests/phil/test_compare.py": "phil",
 }
 
 
