@@ -5,6 +5,7 @@ import time
 
 import canopen
 import numpy as np
+import pytest
 
 from district.federation.engine import free_port
 from gateway.maps.loader import load_all
@@ -19,6 +20,7 @@ SPEED = 300.0
 DAYS = 0.04         # 57.6 min: 11.5 s of wall time
 
 
+@pytest.mark.realtime
 def test_a_canopen_master_commands_a_substation_of_a_running_district(tmp_path):
     hub = CanHub(port=0).start()
     try:

@@ -3,6 +3,7 @@ while house 2 runs its built-in controllers; both houses and the grid are their 
 import subprocess
 
 import numpy as np
+import pytest
 
 from district.federation.engine import free_port
 from profiles.recording import read_recording
@@ -16,6 +17,7 @@ DAYS = 0.05         # 72 min: 18 s of wall time
 PERIOD_MS = 250     # the controller scans every 60 simulated seconds
 
 
+@pytest.mark.realtime
 def test_c_controller_runs_one_house_of_a_district(tmp_path, controller_bin):  # noqa: F811
     p1, p2 = free_port(), free_port()
     twin, out = serve(tmp_path, f"""

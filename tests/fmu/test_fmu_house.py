@@ -128,6 +128,7 @@ def test_fmu_house_api(house_file):
         house.close()
 
 
+@pytest.mark.realtime
 def test_fmu_house_on_an_accelerated_paced_clock(house_file):
     import time
 

@@ -55,6 +55,7 @@ def test_frames_reach_the_other_client_but_not_the_sender(pair):
     assert a.recv(0.05) is None and b.recv(0.05) is None   # no echo of own frames
 
 
+@pytest.mark.realtime
 def test_round_trip_has_no_nagle_tails(pair):
     a, b = pair
     times = []

@@ -102,6 +102,7 @@ def aborted(action: Callable[[], object]) -> int:
     return info.value.code
 
 
+@pytest.mark.realtime
 def test_boot_heartbeat_and_nmt_states_are_honoured(rig):
     assert wait_until(lambda: rig.heartbeats()[:1] == [0])          # boot-up message
     rig.node.sdo[0x1017].raw = 20                                      # heartbeat every 20 ms
@@ -174,6 +175,7 @@ def test_bad_sdo_accesses_get_the_abort_codes_of_the_refusal_table(rig):
                        ("run_request", "state")]
 
 
+@pytest.mark.realtime
 def test_block_transfers_and_unknown_commands_are_aborted_at_once(rig):
     """Issue 15: block requests got no abort; a master waited out its timeout instead."""
     sdo = rig.node.sdo
@@ -200,6 +202,7 @@ def test_block_transfers_and_unknown_commands_are_aborted_at_once(rig):
     assert sdo[0x1008].raw == "neoTower 2.0"                              # still served
 
 
+@pytest.mark.realtime
 def test_pdos_flow_only_in_operational(rig):
     rig.node.tpdo.read()
     rig.node.rpdo.read()

@@ -6,6 +6,7 @@ import math
 import time
 
 import numpy as np
+import pytest
 
 from phil.emulator.server import BenchServer, make_model
 from phil.master import BenchLink
@@ -70,6 +71,7 @@ def test_tap_water_and_solar_follow_within_their_limits():
     assert L["E_heater"] > 1e6 and abs(L["residual"]) < 1e-6 * L["E_heater"]
 
 
+@pytest.mark.realtime
 def test_bench_served_over_modbus_tcp_and_nan_is_judged():
     server = BenchServer("space_heating", speed=50.0).start()
     tap = BenchServer("tap_water", speed=50.0).start()
@@ -95,6 +97,7 @@ def test_bench_served_over_modbus_tcp_and_nan_is_judged():
         server.stop(), tap.stop()
 
 
+@pytest.mark.realtime
 def test_bench_ticks_its_device_outside_the_plant_lock():
     """The server thread takes the device's lock, then the plant's; the pacing thread must not
     take them the other way round (a deadlock: the bench stops answering and accepting)."""

@@ -67,6 +67,7 @@ def test_brine_bench_follows_within_its_capacity_and_its_ledger_closes():
     assert weak.x["P"] <= 6000.0 + 1e-9 and weak.x["T_sup"] < 2.0
 
 
+@pytest.mark.realtime
 def test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector(tmp_path):
     """House 3 in PHIL against the heat-pump source emulator (its own process) on type day 1
     (January) from midnight, 30 min counted: one full duty cycle of the lab's heat pump (20 min
@@ -116,6 +117,7 @@ def test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector(tmp_path):
     assert result["plots"] == ["compare_brine.png", "compare_house.png"]
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("fault", ["nan", "out_of_range", "stale"])
 def test_bad_brine_measurement_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, fault):
     """A broken brine sensor (NaN: an IEEE float register), one reading 100 K high (out of the

@@ -53,6 +53,7 @@ def test_pdo_layout_from_the_map_two_floats_a_frame_and_too_many_named(tmp_path)
         pdo_layout(load_bench_map(text))
 
 
+@pytest.mark.realtime
 def test_setpoints_arrive_in_range_measurements_come_back_and_nothing_else_is_sent():
     bus = "virtual:phil-canopen-exchange"
     bench = load_bench_map("space_heating")
@@ -124,6 +125,7 @@ def test_a_bench_on_another_map_or_none_is_refused_naming_the_fix(tmp_path):
     assert parse_bench("brine=canopen:virtual:lab")[1].bus == "virtual:lab"
 
 
+@pytest.mark.realtime
 def test_sf3_closed_loop_over_canopen_brine_heat_agrees_with_the_ground_collector(tmp_path):
     """As tests/phil/test_brine.py's Modbus loop (house 3, type day 1 from midnight, one duty
     cycle of the lab's heat pump at 200x), the brine bench a CANopen node on a virtual bus in
@@ -154,6 +156,7 @@ def test_sf3_closed_loop_over_canopen_brine_heat_agrees_with_the_ground_collecto
     print("exchange ms", b["exchange_ms"])
 
 
+@pytest.mark.realtime
 def test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints(tmp_path):
     """The bench node falls silent on the bus (it still receives): its TPDOs stop, each
     measurement is rejected as silent with the bench and point named, held, then stale; the run

@@ -6,12 +6,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from phil.emulator.server import BenchServer
 from phil.loop import PhilLoop, PhilOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
+@pytest.mark.realtime
 def test_compare_a_run_with_its_benches_and_the_house_alone(tmp_path):
     servers = {n: BenchServer(n, speed=150.0).start() for n in ("space_heating", "tap_water", "solar")}
     try:

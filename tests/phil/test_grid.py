@@ -62,6 +62,7 @@ def test_grid_bench_follows_within_its_ramp_and_valve_limits_and_its_ledger_clos
     assert low.x["m_flow"] == pytest.approx(1.2 / 3.6 * np.sqrt(0.1), rel=1e-3)
 
 
+@pytest.mark.realtime
 def test_district_house_alone_on_its_grid_against_the_grid_emulator(tmp_path):
     """House 1 (SF1) at its node sf1 of the lab's district (district/districts/coses.toml) in PHIL,
     the district's other houses not simulated (--others none): the grid and the building are
@@ -147,6 +148,7 @@ def test_other_houses_draw_at_their_nodes_move_the_pressure_and_every_house_clos
         assert h.get("closure", 0.0) < 1e-6, name
 
 
+@pytest.mark.realtime
 def test_district_house_with_the_other_houses_against_the_grid_emulator(tmp_path):
     """House 1 at sf1 against the grid emulator (its own process, extracting 10 of every 15 min),
     the other four houses simulated on the grid (the default): from 1:48 of type day 1, 5 min
@@ -183,6 +185,7 @@ def test_district_house_with_the_other_houses_against_the_grid_emulator(tmp_path
     assert abs(json.loads(out.strip().splitlines()[-1])["ledger"]["residual"]) < 1e-3
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("fault", ["nan", "out_of_range", "stale"])
 def test_bad_grid_measurement_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, fault):
     """The substation's return sensor broken (NaN), reading 100 K high (out of range), and the

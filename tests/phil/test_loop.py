@@ -43,6 +43,7 @@ def _stop(*procs: subprocess.Popen) -> list[str]:
     return [proc.communicate(timeout=30)[0] for proc in procs]
 
 
+@pytest.mark.realtime
 def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
     """SF1 with its three benches, each a process of its own, on type day 4 (October) from 8:00:
     heating, the morning's hot-water draws and the collector's first sun. Bench heat = the
@@ -85,6 +86,7 @@ def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
         assert abs(json.loads(out.strip().splitlines()[-1])["ledger"].get("residual", 0.0)) < 1e-3
 
 
+@pytest.mark.realtime
 def test_bench_below_the_requested_flow_for_two_hours_deficit_reported_and_made_up(tmp_path):
     # the bench's pump gives at most 0.24 l/min for two hours of its clock (it starts before
     # the loop: the report finds when from the measurements), type day 1 (January) from midnight
@@ -117,6 +119,7 @@ def _loop(server, tmp_path, **kw):
     return PhilLoop("house1", {"space_heating": ("127.0.0.1", server.port)}, PhilOptions(**opts))
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("fault", ["out_of_range", "exception"])
 def test_bad_bench_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, fault):
     server = BenchServer("space_heating", speed=100.0).start()
@@ -141,6 +144,7 @@ def test_bad_bench_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, faul
     assert rows[-1][flags] == "1" and len(rows[-1]) == len(head)    # intact and flagged to the end
 
 
+@pytest.mark.realtime
 def test_stale_bench_process_stopped_then_killed(tmp_path):
     proc, port = _bench_process()
     try:
@@ -166,6 +170,7 @@ def test_stale_bench_process_stopped_then_killed(tmp_path):
     assert meta["report"]["stop_reason"] == report["stop_reason"]
 
 
+@pytest.mark.realtime
 def test_operator_stop_file(tmp_path):
     server = BenchServer("space_heating", speed=100.0).start()
     try:
@@ -180,6 +185,7 @@ def test_operator_stop_file(tmp_path):
     assert report["stop_reason"].startswith("operator stop")
 
 
+@pytest.mark.realtime
 def test_bench_reporting_l_per_h_where_the_map_says_l_per_min(tmp_path):
     """The bench PLC scales its flow meter in l/h; the twin's map says l/min. The readings are in
     range while the flow is low and sixty times the set-point: rejected as a wrong unit, named."""

@@ -35,6 +35,7 @@ def _rows(run: Path) -> list[dict[str, str]]:
     return list(csv.DictReader((run / "signals.csv").open()))
 
 
+@pytest.mark.realtime
 @pytest.mark.skipif(MBPOLL is None, reason="mbpoll not installed")
 def test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements(tmp_path):
     # type day 4 from 7:00: the morning's hot-water draws make the set-point move
@@ -86,6 +87,7 @@ def test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements(tmp
     assert events[-1]["kind"] == "stop"
 
 
+@pytest.mark.realtime
 def test_space_heating_bench_as_plc_process_polling_the_twin(tmp_path):
     loop = PhilLoop("house1", {"space_heating": BenchAddress("127.0.0.1", 0, serve=True)},
                     PhilOptions(speed=100.0, dt=2.0, hours=0.5, typeday=1, start_h=31.0, warmup_s=300.0,
@@ -109,6 +111,7 @@ def test_space_heating_bench_as_plc_process_polling_the_twin(tmp_path):
     assert b["exchange_ms"]["p99"] < 5.0           # no bus in the step: publish and take
 
 
+@pytest.mark.realtime
 def test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served(tmp_path):
     from phil.emulator.plc import BenchPlc
 

@@ -52,6 +52,7 @@ def test_variant_has_the_signals_its_benches_use(house):
     assert "benches this house is wired for: " + ", ".join(b for b in WIRINGS if b in wired) in str(err.value)
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("house,bench", [("SF4", "space_heating"), ("MF5", "space_heating"),
                                          ("house2", "space_heating_floor")])
 def test_twin_phil_runs_the_variant(tmp_path, house, bench):
@@ -92,6 +93,7 @@ def test_twin_phil_runs_the_variant(tmp_path, house, bench):
         assert "storage.T_top" in result["alone_storages"]
 
 
+@pytest.mark.realtime
 def test_sf2_closed_loop_heat_agrees_with_its_benches(tmp_path):
     """House 2 (SF2) with its three benches, each a process of its own, on type day 4 (October),
     18 min from 8:30: the floor heating against the space-heating bench parametrised for it
