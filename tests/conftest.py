@@ -89,6 +89,10 @@ SHARED_FIXTURE_FILES = (
     "tests/fmu/test_fmu_house.py",
     "tests/fmu/test_export.py",
     "tests/diagnose/test_recording_io.py",
+    "tests/rigsim/test_house2.py",             # jan, apr: the house-2 rig's runs (on main since #28)
+    # the Modbus contract classes (marked realtime): their gateway in one real-time block
+    "tests/gateway/test_modbus_tcp.py",
+    "tests/gateway/test_modbus_rtu.py",
 )
 SAME_WORKER.update({path: path for path in SHARED_FIXTURE_FILES})
 SAME_WORKER.update({f"tests/e2e/{name}.py": "e2e-offline-day" for name in

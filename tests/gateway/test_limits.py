@@ -96,6 +96,7 @@ def test_connection_limit_refuses_one_more_while_the_first_still_work(gateway):
         tr.stop()
 
 
+@pytest.mark.realtime
 def test_idle_timeout_closes_a_silent_connection_only(gateway):
     io = gateway.devices["storage_io"]
     tr, audit = serve(gateway, idle_timeout=0.3)

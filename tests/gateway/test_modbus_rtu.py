@@ -36,6 +36,7 @@ def rtu_gateway(pty_pair):
     gw.transport.stop()
 
 
+@pytest.mark.realtime  # a client that waits 0.3 s for each answer at 19200 baud, no retry
 class TestModbusRtu(DeviceContract):
     transport_name = "modbus-rtu"
 

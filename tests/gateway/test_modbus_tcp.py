@@ -28,6 +28,7 @@ def tcp_gateway():
     gw.transport.stop()
 
 
+@pytest.mark.realtime  # a client that waits 0.3 s for each answer, no retry
 class TestModbusTcp(DeviceContract):
     transport_name = "modbus-tcp"
 
