@@ -14,7 +14,7 @@ heating runs, and each pair of generators on together.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from itertools import combinations
 
 import numpy as np
@@ -54,42 +54,38 @@ class Roles:
     def subsystem(self, signal: str) -> str:
         return (self.subsystems or {}).get(signal.split(".", 1)[0], "other")
 
+    @cached_property
+    def _modes(self) -> tuple:
+        """(flag, its words in the report, the units whose state makes it: (name, on?) each), in
+        the report's order; the heating and charging pumps are the units `heating` and `dhw`."""
+        out = []
+        for g in self.generators:
+            out.append((f"{g.name}_on", f"{g.noun} on", ((g.name, True),)))
+            if g.idles:
+                out.append((f"{g.name}_off", f"{g.noun} off", ((g.name, False),)))
+        if self.circuits:
+            out.append(("heating_on", "heating pump on", (("heating", True),)))
+        if self.chargers:
+            out.append(("dhw_on", "DHW charging on", (("dhw", True),)))
+        if self.circuits:
+            out += [(f"{g.name}_off_heating_on", f"{g.noun} off and heating pump on", ((g.name, False), ("heating", True)))
+                    for g in self.generators if g.idles]
+        out += [(f"{a.name}_on_{b.name}_on", f"{a.noun} and {b.noun} on", ((a.name, True), (b.name, True)))
+                for a, b in combinations(self.generators, 2)]
+        return tuple(out)
+
     def modes(self) -> dict:
         """Mode flag -> its words in the report."""
-        out = {}
-        for g in self.generators:
-            out[f"{g.name}_on"] = f"{g.noun} on"
-            if g.idles:
-                out[f"{g.name}_off"] = f"{g.noun} off"
-        if self.circuits:
-            out["heating_on"] = "heating pump on"
-        if self.chargers:
-            out["dhw_on"] = "DHW charging on"
-        if self.circuits:
-            out.update({f"{g.name}_off_heating_on": f"{g.noun} off and heating pump on"
-                        for g in self.generators if g.idles})
-        out.update({f"{a.name}_on_{b.name}_on": f"{a.noun} and {b.noun} on"
-                    for a, b in combinations(self.generators, 2)})
-        return out
+        return {flag: words for flag, words, _ in self._modes}
 
     def flags(self, data) -> dict:
         """Mode flag -> samples at which the recording's commands put the house in it."""
         on = {g.name: g.runs(data) for g in self.generators}
-        heating = np.any([c.runs(data) for c in self.circuits], axis=0) if self.circuits else None
-        out = {}
-        for g in self.generators:
-            out[f"{g.name}_on"] = on[g.name]
-            if g.idles:
-                out[f"{g.name}_off"] = ~on[g.name]
-        if heating is not None:
-            out["heating_on"] = heating
-        if self.chargers:
-            out["dhw_on"] = np.any([c.runs(data) for c in self.chargers], axis=0)
-        if heating is not None:
-            out.update({f"{g.name}_off_heating_on": ~on[g.name] & heating for g in self.generators if g.idles})
-        out.update({f"{a.name}_on_{b.name}_on": on[a.name] & on[b.name]
-                    for a, b in combinations(self.generators, 2)})
-        return out
+        for name, units in (("heating", self.circuits), ("dhw", self.chargers)):
+            if units:
+                on[name] = np.any([u.runs(data) for u in units], axis=0)
+        return {flag: np.logical_and.reduce([on[u] if state else ~on[u] for u, state in made])
+                for flag, _, made in self._modes}
 
     @property
     def pipes(self) -> dict:
