@@ -24,15 +24,15 @@ NOISE_SIGMAS = 3.0
 MODE_MIN_S = 1800.0
 
 
-def covering_split(t, data, t_split: float, t_max: float, generators=None) -> float:
+def covering_split(t, data, t_split: float, t_max: float, generators) -> float:
     """The end of the training window: t_split, moved later (up to t_max) to the end of the first
     standstill or run of a generator that the training window lacks and the rest of the recording
     holds. Why: a candidate acting in that state (an idle CHP that keeps flowing) has nothing to be
     fitted on otherwise. rigsim's idle_flow_large (realisation 2): its CHP ran through the two
     training days and stood five times after; fitted on no standstill, the idle flow came out 0.
-    generators: roles.Unit of the house (default house 1's)."""
+    generators: the house's (roles.Roles.generators)."""
     dt = np.diff(t, append=t[-1])
-    for unit in generators if generators is not None else roles_mod.of().generators:
+    for unit in generators:
         if unit.command not in data:
             continue
         runs = unit.runs(data)

@@ -72,26 +72,18 @@ ROOM_AFTER = 6 * 3600.0        # s of recorded standstill after which a pipe rea
 MIN_ROOM_SAMPLES = 10
 
 
-def _pipes(pipes: dict | None) -> dict:
-    """sensor -> (its branch's flow signal, the command that starts the branch, the command's
-    threshold): the house's roles (roles.Roles.pipes; None: house 1's)."""
-    from .roles import of
-
-    return of().pipes if pipes is None else pipes
-
-
-def branches(pipes: dict | None = None) -> dict:
-    """flow signal -> the sensors on that branch."""
+def branches(pipes: dict) -> dict:
+    """flow signal -> the sensors on that branch. pipes: sensor -> (its branch's flow signal, the
+    command that starts the branch, the command's threshold): the house's (roles.Roles.pipes)."""
     out: dict = {}
-    for s, (flow, _, _) in _pipes(pipes).items():
+    for s, (flow, _, _) in pipes.items():
         out.setdefault(flow, []).append(s)
     return out
 
 
-def recorded_flowing(rec, signal: str, pipes: dict | None = None) -> np.ndarray | None:
+def recorded_flowing(rec, signal: str, pipes: dict) -> np.ndarray | None:
     """Samples at which the recording says the sensor's branch flows (None: not a pipe sensor):
     its measured flow > FLOWING when recorded, else its command."""
-    pipes = _pipes(pipes)
     if signal not in pipes:
         return None
     flow, cmd, on = pipes[signal]
@@ -102,7 +94,7 @@ def recorded_flowing(rec, signal: str, pipes: dict | None = None) -> np.ndarray 
     return None
 
 
-def scored_mask(rec, measured, pipes: dict | None = None) -> np.ndarray:
+def scored_mask(rec, measured, pipes: dict) -> np.ndarray:
     """[n, len(measured)]: False at the samples where a pipe sensor's branch starts or stops."""
     out = np.ones((len(rec.time), len(measured)), bool)
     for j, s in enumerate(measured):
@@ -112,7 +104,7 @@ def scored_mask(rec, measured, pipes: dict | None = None) -> np.ndarray:
     return out
 
 
-def plant_room(rec, pipes: dict | None = None) -> float | None:
+def plant_room(rec, pipes: dict) -> float | None:
     """The temperature the stagnant pipes cool toward, from the recording: per branch, the median
     reading of its sensors at samples ROOM_AFTER or longer after its last recorded flow; the
     lowest branch's, within ROOM_RANGE. None: no branch stands that long."""
@@ -171,7 +163,7 @@ def _reading(t, fluid, m, mass, decay, T_room):
 
 
 def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None,
-          pipes: dict | None = None) -> dict:
+          pipes: dict) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
     modelled reading (cooling toward T_room); tau and mass per branch fitted on the samples up to
     t_fit at which the branch does not run (None: no fit, the replay's own value). cols: catalogue

@@ -58,16 +58,11 @@ def heldout_error(ctx, sim, mask) -> dict:
     return {s: float(z[j]) for j, s in enumerate(ctx.measured) if np.isfinite(ctx.meas[:, j]).any()}
 
 
-def plot_axes(signals, mismatched, err, unit=None) -> list[dict]:
+def plot_axes(signals, mismatched, err, unit) -> list[dict]:
     """A subsystem plot's axes [{unit, signals}]: its mismatched signals (all of them when none
     is), per catalogue unit the PLOT_PER_AXIS with the largest held-out error, the unit with the
     largest error on top. err: {signal: held-out error}; a signal not in it is not plotted;
-    unit: signal -> its unit (Context.unit; None: house 1's catalogue)."""
-    if unit is None:
-        from .roles import of
-
-        unit = lambda s: of().catalogue.signal(s).unit  # noqa: E731
-
+    unit: signal -> its unit (Context.unit)."""
     def rank(s):
         return err[s] if math.isfinite(err[s]) else -1.0  # never scored held-out: last
 

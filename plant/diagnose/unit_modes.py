@@ -27,14 +27,10 @@ import numpy as np
 MAX_SHARE = 0.2
 
 
-def identify(rec, rows: np.ndarray, catalogue_index, ran: dict | None = None) -> dict:
+def identify(rec, rows: np.ndarray, catalogue_index, ran: dict) -> dict:
     """{unit: {mask (samples whose state differs), samples, share, masked, why}} for the units the
     recording measures; rows: a replay's catalogue rows; catalogue_index: name -> column; ran:
-    unit -> (the signal whose recorded value says it ran, the threshold in its unit: roles.Roles.ran;
-    None: house 1's)."""
-    from .roles import of
-
-    ran = of().ran if ran is None else ran
+    unit -> (the signal whose recorded value says it ran, the threshold in its unit: roles.Roles.ran)."""
     out = {}
     n = len(rows)
     for unit, (sig, thr) in ran.items():

@@ -11,8 +11,10 @@ from plant.truth import synth
 from plant.diagnose import calibration, pipe_sensor
 from plant.diagnose.context import Context
 from plant.diagnose.pipe_sensor import scored_mask
+from plant.diagnose.roles import of as roles_of
 
 CIRCUIT = synth.LAB_SIGNALS + ["dhw.m_flow_hot"]
+PIPES = roles_of("house1").pipes
 
 
 def test_a_recording_with_the_circuit_and_the_draw_is_replayed_on_the_cut():
@@ -64,12 +66,12 @@ def test_a_leaking_valve_shows_in_the_mixing_station_replayed_alone():
 def test_pipe_sensors_are_scored_except_where_their_branch_switches():
     rec = synth.make("none", days=0.6, noise=False)
     measured = ["chp.T_sup", "boiler.T_sup", "storage.T_sensor_5"]
-    mask = scored_mask(rec, measured)
+    mask = scored_mask(rec, measured, PIPES)
     # a measured flow beats the command: the recording has the boiler's flow, not the CHP's
-    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "boiler.T_sup"), rec.data["boiler.m_flow"] > 1e-3)
-    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "chp.T_sup"), rec.data["chp.on"] > 0.5)
+    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "boiler.T_sup", PIPES), rec.data["boiler.m_flow"] > 1e-3)
+    assert np.array_equal(pipe_sensor.recorded_flowing(rec, "chp.T_sup", PIPES), rec.data["chp.on"] > 0.5)
     for j, s in enumerate(measured[:2]):
-        f = pipe_sensor.recorded_flowing(rec, s)
+        f = pipe_sensor.recorded_flowing(rec, s, PIPES)
         switches = np.flatnonzero(f[1:] != f[:-1]) + 1
         assert switches.size >= 2 and not mask[switches, j].any()  # a start or stop: its instant is unknown
         assert mask[:, j].sum() == len(mask) - switches.size
@@ -91,7 +93,7 @@ def _fit_chp_pipe(t, measured, fluid, flow, T_room):
     the first half: -> (reading, PipeFit)."""
     out = np.column_stack([fluid, flow])
     fits = pipe_sensor.apply(_Rec(t, {"chp.T_sup": measured, "chp.m_flow": flow}), out,
-                             {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, T_room, t[-1] / 2)
+                             {"chp.T_sup": 0, "chp.m_flow": 1}, t.size, T_room, t[-1] / 2, PIPES)
     return out[:, 0], fits["chp.m_flow"]
 
 
@@ -146,9 +148,9 @@ def test_the_plant_room_is_read_off_long_standstills_of_the_coolest_branch():
 
     rec = _Rec(t, {"chp.T_sup": chp, "chp.m_flow": np.where(flowing, 0.1, 0.0),
                    "boiler.T_sup": np.where(flowing, 70.0, 35.0), "boiler.m_flow": np.where(flowing, 0.2, 0.0)})
-    assert abs(pipe_sensor.plant_room(rec) - 23.0) < 0.01
+    assert abs(pipe_sensor.plant_room(rec, PIPES) - 23.0) < 0.01
     rec.data["chp.m_flow"] = rec.data["boiler.m_flow"] = np.full(t.size, 0.1)  # nothing stands 6 h
-    assert pipe_sensor.plant_room(rec) is None
+    assert pipe_sensor.plant_room(rec, PIPES) is None
 
 
 def test_guideline_14_hourly_figures_follow_their_formula():

@@ -16,6 +16,8 @@ from plant.catalogue import CATALOGUE
 from plant.diagnose import diagnose, plots, recording_io
 from labsim.suite import make_case
 
+UNIT = lambda s: CATALOGUE.signal(s).unit  # noqa: E731  (house 1's units)
+
 DAYS, TRAIN, DPI = 1.5, 0.6, 80
 
 
@@ -117,12 +119,12 @@ def test_plot_axes_prefer_mismatched_signals_one_axis_per_unit_worst_first():
     others = ["boiler.m_flow", "boiler.Q_flow", "chp.P_el"]
     err = {s: float(i) for i, s in enumerate(temps)} | {"boiler.m_flow": 50.0, "boiler.Q_flow": 3.5,
                                                          "chp.P_el": math.nan}
-    axes = plots.plot_axes(temps + others, temps + others, err)
+    axes = plots.plot_axes(temps + others, temps + others, err, UNIT)
     assert [a["unit"] for a in axes] == ["kg/s", "degC", "W"]
     assert axes[1]["signals"] == temps[::-1][: plots.PLOT_PER_AXIS]
     assert axes[2]["signals"] == ["boiler.Q_flow", "chp.P_el"]  # never scored: last
     # only the mismatched signals when there are any; all of them when there are none
-    assert plots.plot_axes(temps + others, ["chp.P_el"], err) == [{"unit": "W", "signals": ["chp.P_el"]}]
-    assert len(plots.plot_axes(temps + others, [], err)) == 3
+    assert plots.plot_axes(temps + others, ["chp.P_el"], err, UNIT) == [{"unit": "W", "signals": ["chp.P_el"]}]
+    assert len(plots.plot_axes(temps + others, [], err, UNIT)) == 3
     # a signal without any measured value (not in err) is not plotted
-    assert plots.plot_axes(["zone.T_room"], ["zone.T_room"], err) == []
+    assert plots.plot_axes(["zone.T_room"], ["zone.T_room"], err, UNIT) == []

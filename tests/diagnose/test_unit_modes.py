@@ -6,6 +6,8 @@ import numpy as np
 
 from plant.diagnose import unit_modes
 
+RAN = {"boiler": ("boiler.Q_flow", 500.0)}  # house 1's boiler (roles.Roles.ran)
+
 
 class _Rec:
     def __init__(self, data):
@@ -35,7 +37,7 @@ def test_a_lockout_is_masked_for_the_units_own_signals_only():
     lockout[[60, 61, 62, 160, 161]] = True
     lab, twin = _boiler(n, on, lockout)
     rows = np.column_stack([twin])
-    modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), rows, {"boiler.Q_flow": 0}.__getitem__)
+    modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), rows, {"boiler.Q_flow": 0}.__getitem__, RAN)
     m = modes["boiler"]
     assert m["masked"] and m["samples"] == 5 and m["lab_runs_twin_not"] == 0 and m["twin_runs_lab_not"] == 5
     assert m["share_of_running"] == 5 / on.sum()
@@ -51,7 +53,7 @@ def test_a_unit_run_differently_is_not_masked():
     on = (np.arange(n) // 50) % 2 == 1
     lab, twin = _boiler(n, on, on & (np.arange(n) % 3 == 0))   # a third of its running samples
     modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), np.column_stack([twin]),
-                                {"boiler.Q_flow": 0}.__getitem__)
+                                {"boiler.Q_flow": 0}.__getitem__, RAN)
     m = modes["boiler"]
     assert not m["masked"] and m["share_of_running"] > unit_modes.MAX_SHARE and not m["mask"].any()
     assert "scored" in m["why"]
