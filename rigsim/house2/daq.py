@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import daq as _daq
 from .. import tables
-from . import core
+from . import layout
 from .model import DATASHEET
 
 
@@ -23,8 +23,8 @@ def channel_list() -> list[dict]:
 
 CHANNELS = _daq.channels_of(channel_list())
 NAMES = [c["channel"] for c in CHANNELS]
-if NAMES != core.CH_NAMES:
-    raise RuntimeError("rigsim.house2.core.CH_NAMES differs from house2-channels.csv")
+if NAMES != layout.CH_NAMES:
+    raise RuntimeError("rigsim.house2.layout.CH_NAMES differs from house2-channels.csv")
 
 _EXACT = {"ASHP_ASHP_on", "ASHP_Modulation_set", "ASHP_AuxModulation_set", "ASHP_A_V3_TL",
           "EB_EB_power_kW_set", "ST_PUMP_CMD", "ST_S_FW_ST_VL_set", "STM_HCVLaM_Set_degC",

@@ -1,6 +1,7 @@
 """rigsim's house-2 rig (SF2): datasheet, realisations (nuisance), effects, inputs, simulate().
 
-Everything here follows docs/lab/house2-rig.md; the numerical core is rigsim/house2/core.py.
+Everything here follows docs/lab/house2-rig.md; the numerical core is rigsim/house2/core.py
+(array layout in rigsim/house2/layout.py).
 """
 from __future__ import annotations
 
@@ -11,12 +12,12 @@ from functools import lru_cache
 import numpy as np
 
 from ..inputs import seconds_of_year
-from ..model import (Result, _cell_UA, _window_weights, coil_weights, effects_from, pipe_sensors,
-                     sample_grid)
+from ..geometry import _cell_UA, _window_weights, coil_weights, pipe_sensors, sample_grid
+from ..model import Result, effects_from
 from ..tables import DATA, dhwcalc_minutes, read_text_tables, table
-from . import core
+from . import core, layout
 
-CP = core.CP
+CP = layout.CP
 DATASHEET = dict(
     tank_volume_m3=0.785, tank_diameter_m=0.79, tank_height_m=1.60, tank_UA_W_per_K=7.0,
     sensor_heights_m=[0.08, 0.24, 0.40, 0.56, 0.72, 0.88, 1.04, 1.20, 1.36, 1.52],
@@ -207,8 +208,8 @@ def _floor_K(Q_N, UA_total, n_seg, n_exp):
 def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: float = 7.0,
              jitter_seed: int = 0, dt: float = DT, spinup_days: float = SPINUP_DAYS) -> Result:
     nz = nuisance
-    P = np.zeros(core.N_PARAM)
-    g = core.__dict__
+    P = np.zeros(layout.N_PARAM)
+    g = layout.__dict__
     def setp(name, v):  # noqa: E306
         P[g["P_" + name]] = v
     T_pl = nz["plant_room_C"]
@@ -298,8 +299,8 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     setp("TAU_ROOM", 120.0)
     setp("TAU_COLL", 20.0)
     # ---- node capacities and sensor pipe water ----
-    Cn = np.zeros(core.N_NODES)
-    N = {name: i for i, name in enumerate(core.N_NAMES)}
+    Cn = np.zeros(layout.N_NODES)
+    N = {name: i for i, name in enumerate(layout.N_NAMES)}
     s_C, s_UA = pipe_sensors(nz, PIPE_SENSORS, CP)
     for i, nn in enumerate(["HP_VL", "HP_RL", "CB_VL", "CB_RL", "HC_VL", "HC_RL"]):
         Cn[N[nn]] = s_C[i]
@@ -328,18 +329,18 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     Tt = np.linspace(30.0, 58.0, n)
     Tc = np.full(N_COIL_SEG, 30.0)
     Tf = np.full(N_FLOOR_SEG, 28.0)
-    nodes = np.full(core.N_NODES, 35.0)
+    nodes = np.full(layout.N_NODES, 35.0)
     nodes[N["SH"]] = nodes[N["RH"]] = 40.0
     nodes[N["COL"]] = nodes[N["SPS"]] = nodes[N["SPR"]] = inp["T_out"][0]
     nodes[N["SLAB"]] = 27.0
     nodes[N["ROOM"]] = 20.5
     nodes[N["MASS"]] = 17.0
 
-    tags = core.CH_NAMES
+    tags = layout.CH_NAMES
     eff_tag = tags.index(effects.sensor_tag) if effects.sensor_tag else -1
-    rec = np.zeros((n_samp, core.N_CH))
-    aux = np.zeros((n_samp, core.N_AUX))
-    led = np.zeros(core.N_LEDGER)
+    rec = np.zeros((n_samp, layout.N_CH))
+    aux = np.zeros((n_samp, layout.N_AUX))
+    led = np.zeros(layout.N_LEDGER)
     n_rec = core.run(P, Tt, Tc, Tf, nodes, Cn, s_UA, sens_pos, sens_tau,
                      w_hp_up, w_hp_lo, k_hp_up_out, k_hp_lo_out, w_boi, k_boi_out, k_hc_out,
                      w_hc_in, w_cold, k_hot, t_UA, coil_W, *_tables(),
@@ -349,7 +350,7 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
                      float(effects.offset_K), rec, aux, led)
     if n_rec != n_samp:
         raise RuntimeError(f"recorded {n_rec} of {n_samp} samples")
-    L = {name: led[i] for i, name in enumerate(core.L_NAMES)}
+    L = {name: led[i] for i, name in enumerate(layout.L_NAMES)}
     kwh = 3.6e6
     ledger = {
         "gas_in_kWh": L["GAS"] / kwh,
