@@ -50,13 +50,6 @@ CIRCUIT_OUTPUTS = ("mixer.T_sup", "mixer.m_flow", "mixer.y_valve")
 RADIATOR_INPUTS = ("mixer.m_flow", "mixer.T_sup", "zone.T_room")
 RADIATOR_OUTPUTS = ("mixer.T_ret",)
 
-def subsystem(signal: str, roles=None) -> str:
-    """The subsystem a signal belongs to (roles.Roles.subsystem; None: house 1's)."""
-    from .roles import of
-
-    return (roles or of()).subsystem(signal)
-
-
 def select(rec, house: str, required: bool = False):
     """The cut whose recorded signals the recording holds (None: the whole house), and whether
     the mixing station can be replayed alone. required: a recording that allows no cut is an

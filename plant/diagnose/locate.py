@@ -9,7 +9,6 @@ import numpy as np
 from ..units import UNITS
 from ..water import CP, RHO
 from .context import MISMATCH_TOL
-from .cut import subsystem
 
 KWH = UNITS["kWh"].factor  # J in one kWh (3.6e6)
 
@@ -137,7 +136,7 @@ def subsystems(ctx, sim: np.ndarray, mask: np.ndarray, mismatched: list[str]) ->
     total = float(np.nansum(per)) or 1e-12
     groups: dict = {}
     for j, s in enumerate(ctx.measured):
-        groups.setdefault(subsystem(s, ctx.roles), []).append(j)
+        groups.setdefault(ctx.roles.subsystem(s), []).append(j)
     out = []
     for name, idx in groups.items():
         with np.errstate(invalid="ignore"), warnings.catch_warnings():

@@ -9,7 +9,6 @@ import numpy as np
 
 from . import locate
 from . import plots as plots_mod
-from .cut import subsystem
 
 SCHEMA = "twin-diagnose/1"
 
@@ -119,7 +118,7 @@ def _signal_figures(ctx, sim0, after) -> dict:
                       "heldout_rmse_after": ma_h.get(s, {}).get("rmse"),
                       "cvrmse_pct_before": mb_all[s]["cvrmse_pct"], "cvrmse_pct_after": ma_all[s]["cvrmse_pct"],
                       "nmbe_pct_before": mb_all[s]["nmbe_pct"], "nmbe_pct_after": ma_all[s]["nmbe_pct"],
-                      "subsystem": subsystem(s, ctx.roles), "guideline_14_hourly": g14}
+                      "subsystem": ctx.roles.subsystem(s), "guideline_14_hourly": g14}
     return signals
 
 
