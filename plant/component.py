@@ -22,6 +22,23 @@ from .errors import ConfigError, did_you_mean
 from .links import REQUIRED, DataSet, Height, Link, SignalName, Valve, link, link_problem  # noqa: F401 (kinds import them here)
 
 
+@dataclass(frozen=True)
+class Knob:
+    """A parameter a kind declares uncertain in a house file and able to set a replayed signal
+    directly, so the diagnosis re-fits it within narrow bounds before any effect is judged
+    (plant/diagnose/calibration.py). Names are the instance's own parameters or options, or
+    `link.name`: a parameter of the instance that link names."""
+    key: str                     # what is re-fitted
+    unit: str
+    why: str
+    rel: float = 0.0             # bounds: the file value x (1 -+ rel) ...
+    bounds: tuple | None = None  # ... or absolute (a file value of 0: the ideal)
+    rank: int = 0                # the order of the re-fit's coordinate descent over the house's knobs
+    also: tuple = ()             # further keys that take the same value (a pair of headers)
+    joint: bool = True           # re-fitted again with each simulate candidate
+    signals: tuple = ()          # calibrated first on these outputs alone ("link.*": that storage's sensors)
+
+
 def param(default, unit: str, doc: str, lo: float | None = None, hi: float | None = None):
     """Declare a parameter field: default value, unit ('1' for fractions, 'degC', 'W', ...), meaning, range."""
     return field(default=default, metadata={"unit": unit, "doc": doc, "lo": lo, "hi": hi})
@@ -166,6 +183,9 @@ class Kind:
     SUBSTITUTES: dict = {}        # command input -> the output a recording may give instead (the RUN
     #                               command standing in for a modulation: 1 while on)
     UNMEASURED: tuple = ()        # outputs no lab measures (book-keeping, set-points): never compared
+    KNOBS: tuple = ()             # Knob: calibration the diagnosis may re-fit before judging effects
+    COMMANDS: tuple = ()          # inputs the kind's own control writes (a solar station's pump): a
+    #                               recording that carries them drives them, else the kind decides
 
     def initial_state(self, inst) -> np.ndarray:
         return np.zeros(0)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Instance, Kind as ComponentKind, indices, link, param
+from ..component import REQUIRED, Instance, Kind as ComponentKind, Knob, indices, link, param
 from ..water import CP, RHO
 from . import zone as zone_kind
 
@@ -82,6 +82,9 @@ class Kind(ComponentKind):
     Params = Params
     role = "emitter"
     LINKS = {"zone": link(REQUIRED, "the zone the radiators heat", type=Instance, range=("zone",))}
+    KNOBS = (Knob("Q_nominal", "W", "emitter size (rating, valve settings): with the mixer set-points "
+                  "replayed it sets the heating return temperature, hence the storage bottom and the "
+                  "coupling point's return", rel=0.10, rank=1),)
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -206,6 +206,9 @@ class Kind(ComponentKind):
     name = "solar_collector"
     Params = Params
     role = "connection"
+    # the station's pump is the kind's own control: a recording of it drives it (COMMANDS); its
+    # supply and return sensors sit on the loop's pipes, which stand while the pump is off
+    RUN, PIPES, COMMANDS = ("on", 0.5), ("T_sup", "T_ret"), ("on", "m_flow_set")
     LINKS = {"storage": link(REQUIRED, "the storage the solar coil is in", type=Instance, range=("storage",)),
              "top": link(REQUIRED, "height of the coil inlet [m above the storage bottom], or { upper = ..., "
                                    "lower = ... } for two coils behind the solar valve", type=Valve),

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ..component import REQUIRED, Kind as ComponentKind, indices, param
+from ..component import REQUIRED, Kind as ComponentKind, Knob, indices, param
 
 STATES = ("T_room", "T_mass")
 
@@ -99,6 +99,8 @@ class Kind(ComponentKind):
     Params = Params
     role = "zone"
     UNMEASURED = ("T_set", "Q_flow_gains", "Q_flow_solar")
+    KNOBS = (Knob("H_direct", "W/K", "room-to-outdoor conductance (ventilation, leakage): the room "
+                  "temperature and, through it, the emitter's emission", rel=0.10, rank=2),)
 
     def initial_state(self, inst):
         return initial_state(inst.params)

@@ -1,6 +1,6 @@
 """Calibrate the nominal structure the recording can pin down, before and beside the candidates.
 
-Nominal re-fit (NOMINAL_REFIT): a few nominal twin parameters that are uncertain in the house
+Nominal re-fit (knobs: the kinds' KNOBS): a few nominal twin parameters that are uncertain in the house
 file but matter for replay are re-fitted within bounds on the training window (narrow, +-10 % of
 the file value, or a rig's declared tolerance: the storage loss +-40 %, the DHW coil +-25 %, the
 CHP's water and metal 2.5-30 l), (1) for the nominal model alone, so the "before" baseline is the best nominal
@@ -39,64 +39,43 @@ class NominalParam:
         return {k: float(value) for k in (self.key, *self.also)}
 
 
-SWITCH_SENSORS = ("switch.T_sup", "switch.T_ret")
+def knobs(house: str) -> tuple:
+    """The house's re-fitted nominals (NominalParam), from its kinds' KNOBS (plant/component.py
+    Knob): each instance's, named for it and its links, in the order of the knobs' rank (the
+    slow whole-tank parts first) and then of declaration; a key two instances name (a storage two
+    coupling points feed) once."""
+    from ..declaration import load
+    from ..kinds import KINDS
 
-# Uncertain in the house file, and each sets a replayed signal directly while the commands are
-# replayed (bounds narrow on purpose: an effect the twin lacks must not hide in them):
-NOMINAL_REFIT = (
-    NominalParam("storage.UA_loss", 0.40, "W/K",
-                 "storage standby loss (insulation, plant-room temperature): the slope of all ten "
-                 "storage sensors while no generator runs; +-40 % holds the rig description's "
-                 "tolerance (docs/lab/house1-rig.md §5: 15 ... 28 W/K for the datasheet's 20); "
-                 "+-15 % left labsim's drawn rigs (25 W/K) on the bound"),
-    NominalParam("radiator.Q_nominal", 0.10, "W",
-                 "radiator size (rating, valve settings): with the mixer set-points replayed it sets "
-                 "the heating return temperature, hence the storage bottom and switch return"),
-    NominalParam("zone.H_direct", 0.10, "W/K",
-                 "room-to-outdoor conductance (ventilation, leakage): the room temperature and, "
-                 "through it, the radiator emission"),
-    NominalParam("switch.storage_inlet_mixing", 0.0, "m3",
-                 "the inlet zone any real tank has at its ports and the file's ideal (0) lacks: up to "
-                 "50 l (2.5 of the file's 20 l layers); the storage_mixing candidate fits a plume "
-                 "beyond it. labsim's tank with no plume looks like 53 l on an upwind 80-layer twin "
-                 "(11 % of the held-out cost); 100 l, as before the storage scheme was calibrated, "
-                 "hid a 120 l plume", bounds=(0.0, 0.05)),
-    # The switch's headers (a mixed volume each, plant/components/pipe.py) carry the coupling
-    # point's sensors; the file's 10 l and 1 W/K are guesses for headers and their pipes. On
-    # labsim's no-effect case (20 kg headers, no loss) the file's values left 4 K RMS on both
-    # switch sensors (they cooled 14 K in 3 h of standstill where the recording held). They are
-    # calibrated first on the switch sensors alone: on the whole cost the header loss trades
-    # off against the storage's (2 x 1 W/K at 50 K is 100 W, 13 K of the tank in five days),
-    # which a coordinate pass cannot untangle. They are calibrated once, not again with each
-    # candidate; the loss within 0-3 W/K each (the file's 1 W/K and the ideal 0): a header or
-    # pipe that loses more is the pipe_heat_loss candidate, which sets the same keys over its
-    # own wide range.
-    NominalParam("supply_header.V", 0.0, "m3",
-                 "water content of the switch's headers and their pipes (both headers): how fast "
-                 "the switch sensors follow a change of the flows through them",
-                 bounds=(0.005, 0.05), also=("return_header.V",), joint=False, signals=SWITCH_SENSORS),
-    NominalParam("supply_header.UA_loss", 0.0, "W/K",
-                 "heat loss of each switch header: how the switch sensors drift while nothing flows",
-                 bounds=(0.0, 3.0), also=("return_header.UA_loss",), joint=False, signals=SWITCH_SENSORS),
-    # A generator's water and metal delay its outlet (a CHP at 0.04 kg/s with 75 kJ/K: 450 s).
-    # The file's 2.5 l reproduces the measured start-up table's rise, not a rig's unit with its
-    # pipes; the rig description (docs/lab/house1-rig.md §5) gives 15 kg water and 40 kg steel,
-    # +-30 % (about 20 l of water equivalent). Left at the file's value, labsim's drawn rigs (40-110
-    # kJ/K) put a 400-520 s "sensor lag" on chp.T_sup as a second effect. Calibrated first on the
-    # CHP's outlet sensor alone, once.
-    NominalParam("chp.V_water", 0.0, "m3",
-                 "water and metal of the CHP and its outlet pipe (water equivalent): how its outlet "
-                 "follows a start, a stop and a change of flow", bounds=(0.0025, 0.03), joint=False,
-                 signals=("chp.T_sup",)),
-    # The DHW coil's transfer sets how fast a charge heats the DHW tank and how far up; the rig
-    # description gives 640 W/K within 480 ... 800 (a coil's fouling state, its real area). Drawn
-    # within that range, labsim's rig left a -3 K "offset" on the DHW tank's top sensor in a case
-    # with no effect. Calibrated first on the DHW tank's sensors alone, once; a coil fouled far
-    # beyond that (labsim's fouled_dhw_coil: x 0.3) stays outside.
-    NominalParam("dhw_pump.UA", 0.25, "W/K",
-                 "DHW coil heat transfer (area, fouling): how fast and how high a charge heats the DHW tank",
-                 joint=False, signals=tuple(f"dhw_storage.T_sensor_{k}" for k in range(1, 11))),
-)
+    spec = load(house)
+    found = {}
+    for n, inst in enumerate(spec.instances.values()):
+        for k in KINDS[inst.kind].KNOBS:
+            key = _named(inst, k.key)
+            if key in found:
+                continue
+            q = NominalParam(key, k.rel, k.unit, k.why, k.bounds, tuple(_named(inst, a) for a in k.also),
+                             k.joint, tuple(s for local in k.signals for s in _outputs(spec, inst, local)))
+            found[key] = (k.rank, n, q)
+    return tuple(q for _, _, q in sorted(found.values(), key=lambda v: v[:2]))
+
+
+def _named(inst, local: str) -> str:
+    """A knob's key for `inst`: its own parameter, or `link.name` on the instance the link names."""
+    link, _, name = local.rpartition(".")
+    return f"{inst.options[link]}.{name}" if link else f"{inst.name}.{name}"
+
+
+def _outputs(spec, inst, local: str) -> list:
+    """A knob's signals: the instance's own output, or `link.*`: the sensors of the storage the
+    link names."""
+    if not local.endswith(".*"):
+        return [f"{inst.name}.{local}"]
+    st = spec.instances[inst.options[local[:-2]]]
+    n = st.options.get("sensors", 10)
+    return [f"{st.name}.T_sensor_{k}" for k in range(1, (n if isinstance(n, int) else 10) + 1)]
+
+
 # How finely the storage resolves its thermocline, chosen before the re-fit (a discrete choice):
 # an independent tank's stratification spreads as its own discretisation and mixing make it.
 # The file's scheme is sharp (superbee, 40 layers); the storage kernel also offers the original
@@ -117,7 +96,7 @@ STORAGE_SCHEMES = (
 )
 
 
-def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
+def nominal_params(house: str, refit=None, instances=None) -> list:
     """Param objects (name = override key, bounds = file value -+ rel) of the re-fitted nominals
     (instances: those the replay has, Replayer.instances(); a cut replaces the radiator and the
     room by measurements, so their parameters are not re-fitted there)."""
@@ -125,7 +104,7 @@ def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
 
     spec = load(house)
     out = []
-    for q in refit:
+    for q in refit if refit is not None else knobs(house):
         section, _, key = q.key.partition(".")
         if instances is not None and section not in instances:
             continue
@@ -139,11 +118,12 @@ def nominal_params(house: str, refit=NOMINAL_REFIT, instances=None) -> list:
     return out
 
 
-def refit_nominal(ctx, replayer, house: str, refit=NOMINAL_REFIT, jobs: int | None = 1) -> dict:
+def refit_nominal(ctx, replayer, house: str, refit=None, jobs: int | None = 1) -> dict:
     """Fit the nominal re-fit parameters of the nominal model (no candidate) on the training
     window. -> report entry; its "overrides" (the fitted values and the storage scheme chosen)
     are what every later replay starts from (Replayer.with_calibration), its "params" those
     re-fitted again with each candidate."""
+    refit = knobs(house) if refit is None else refit
     params = nominal_params(house, refit, replayer.instances() - replayer.calibrated)
     refit = [q for q in refit if q.key in {p.name for p in params}]
 
@@ -209,7 +189,7 @@ def _added(before, after) -> dict:
     return {k: v for k, v in after.base.items() if k not in before.base or before.base[k] != v}
 
 
-def ranges(nref, refit=NOMINAL_REFIT) -> dict:
+def ranges(nref, refit) -> dict:
     """override key -> (lo, hi): the values the nominal re-fit could take (a pair of headers: both
     keys), from refit_nominal's report entry."""
     also = {q.key: q.also for q in refit}

@@ -26,7 +26,7 @@ from . import sensor_height
 from .bounded import descent, scalar_search
 from .sim_fit import TrainingCost, along, local_pass, rechoose_scheme
 
-JOINT_REFIT = True   # re-fit NOMINAL_REFIT jointly with each simulate candidate (else: kept fixed)
+JOINT_REFIT = True   # re-fit the nominal knobs (calibration.knobs) jointly with each simulate candidate (else: kept fixed)
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from . import report as report_mod
 from . import verdict as verdict_mod
 from .context import Context
 from ..declaration import load
-from .effects import catalogue
+from .effects import UnitEffect, catalogue
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,7 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
 
 def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | None = 1) -> Baseline:
     """The subsystems replayed alone calibrated on their own interfaces, the unit modes the twin
-    lacks masked, then the nominal re-fit (calibration.NOMINAL_REFIT, narrow bounds; its
+    lacks masked, then the nominal re-fit (calibration.knobs, narrow bounds; its
     identifiability's replays in up to `jobs` processes)."""
     ctx, rp = p.ctx, p.replayer
     radiator = rp.calibrate_radiator(ctx.train)
@@ -99,7 +99,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     if refit_nominal:
         nref = calibration.refit_nominal(ctx, rp, house, jobs=jobs)
         rp = rp.with_calibration(nref["overrides"])
-        ranges = calibration.ranges(nref)
+        ranges = calibration.ranges(nref, calibration.knobs(house))
         nominal = rp.run()
         sim_file = first.rows[:, ctx.cols]
         nref = {**nref, "train_cost_file": ctx.cost(sim_file, ctx.train),
@@ -134,12 +134,18 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
     ctx, rp = b.ctx, b.replayer
     results, todo = [], []
     present = set(load(rp.house_name).instances)
-    for e in (effects if effects is not None else catalogue()):
+    for e in (effects if effects is not None else catalogue(rp.house_name)):
         # a plant effect written for an instance this house lacks (a signal effect's component,
         # "sensor", is whichever sensor it is fitted on)
         if e.kind == "simulate" and e.component and e.component not in present:
             results.append(fit.Result(e.id, e.component, e.kind, False,
                                       f"{rp.house_name} has no {e.component}", effect=e))
+            continue
+        # a unit's own candidate on a unit the cut replaced (house 1's station and radiators
+        # have their own replay alone, _alone)
+        if isinstance(e, UnitEffect) and e.component in rp.removed:
+            results.append(fit.Result(e.id, e.component, e.kind, False, f"the replay's cut puts measurements where "
+                                      f"{e.component} was ({rp.plant_label})", effect=e))
             continue
         ok, why = e.plausible(ctx) if e.available else (False, e.description)
         if not ok:

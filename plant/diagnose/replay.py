@@ -102,7 +102,7 @@ class Replayer:
         self.plant_name = str(self.cut.path()) if self.cut else house
         self.plant_label = self.cut.label if self.cut else str(house)
         self.roles = roles_mod.of(house)
-        self.commands = [c for c in self.roles.commands if c.split(".", 1)[0] not in removed]
+        self.commands = [c for c in self.roles.replayed(rec) if c.split(".", 1)[0] not in removed]
         bound = dict(self.cut.bindings) if self.cut else {}
         self.names = self.commands + list(bound)
         self.cmd = np.column_stack([rec.data[c] for c in self.commands] + [rec.data[s] for s in bound.values()])

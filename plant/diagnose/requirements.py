@@ -40,9 +40,11 @@ def requirements(house="house1") -> dict:
     per: dict = {}
     for s in comparable(house):
         per.setdefault(roles.subsystem(s), []).append(s)
-    return {
+    out = {
         "commands (required; replayed into the twin)": list(roles.commands),
         "accepted substitutes (with a warning)": {k: f"or {v}" for k, v in roles.substitutes.items()},
+        "commands of a unit's own control (optional; replayed where recorded, else the twin's control decides)":
+            list(roles.own_commands),
         "boundary conditions (optional; taken from the twin's profiles by date, checked if present)":
             [b for b in BOUNDARY if b in roles.catalogue],
         "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
@@ -52,6 +54,7 @@ def requirements(house="house1") -> dict:
         "measured boundaries (optional; what each signal enables)": [
             f"{sig} -> {what}" for sig, what in cut_mod.requirements(house).items()],
     }
+    return {k: v for k, v in out.items() if v or k.startswith("commands (")}
 
 
 def lines(req: dict) -> list[str]:

@@ -2,8 +2,9 @@
 instance names: the commands a recording replays (what the house's controllers write), the
 units whose operating mode a recording shows (a kind's RUN: the command that starts it and the
 value above which it runs), the running state a lab measures (RAN), the pipe sensors on each
-unit's branch (PIPES), the commands a measured output may stand in for (SUBSTITUTES) and the
-outputs no lab measures (UNMEASURED). plant/component.py declares those attributes; a kind that
+unit's branch (PIPES), the commands a measured output may stand in for (SUBSTITUTES), the
+outputs no lab measures (UNMEASURED) and the inputs a kind's own control writes, which a
+recording drives where it carries them (COMMANDS). plant/component.py declares those attributes; a kind that
 sets them takes part, whatever the house calls its instance.
 
 The operating modes the diagnosis localises a mismatch in are built from the units: each
@@ -50,6 +51,8 @@ class Roles:
     catalogue: object = None  # the house's SignalCatalogue: the replay's columns, every signal's unit
     buffer: tuple | None = None  # (storage, volume m3, its sensors): the first storage a coupling point feeds
     subsystems: dict | None = None  # instance -> the subsystem the report localises a mismatch in
+    loops: tuple = ()         # other units with a pump and pipe sensors (a solar loop)
+    own_commands: tuple = ()  # inputs a kind's own control writes: replayed where recorded (COMMANDS)
 
     def subsystem(self, signal: str) -> str:
         return (self.subsystems or {}).get(signal.split(".", 1)[0], "other")
@@ -90,7 +93,13 @@ class Roles:
     @property
     def pipes(self) -> dict:
         """Pipe sensor -> (its branch's flow, the command that starts the branch, its threshold)."""
-        return {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits) for p in u.pipes}
+        return {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits, *self.loops)
+                for p in u.pipes}
+
+    def replayed(self, rec) -> tuple:
+        """The commands a replay drives from `rec`: its controllers' (all required) and the kinds'
+        own controls it recorded."""
+        return self.commands + tuple(c for c in self.own_commands if rec.has(c))
 
     @property
     def ran(self) -> dict:
@@ -121,6 +130,7 @@ def of(house="house1") -> Roles:
     generators = tuple(unit(i) for i in runs if KINDS[i.kind].role == "generator")
     circuits = tuple(unit(i) for i in runs if KINDS[i.kind].role == "consumer" and KINDS[i.kind].PIPES)
     chargers = tuple(unit(i) for i in runs if KINDS[i.kind].role == "consumer" and not KINDS[i.kind].PIPES)
+    loops = tuple(unit(i) for i in runs if KINDS[i.kind].role not in ("generator", "consumer") and KINDS[i.kind].PIPES)
     order = {i.name: n for n, i in enumerate(inst)}
     # a controller the house file switches off (active = 0: the substation's rules in a house run
     # alone) writes nothing a recording must carry; its inputs stay at rest in the replay
@@ -129,6 +139,7 @@ def of(house="house1") -> Roles:
     commands = tuple(sorted(dict.fromkeys(written), key=lambda s: order.get(s.split(".", 1)[0], len(order))))
     substitutes = {f"{i.name}.{a}": f"{i.name}.{b}" for i in inst for a, b in KINDS[i.kind].SUBSTITUTES.items()}
     unmeasured = frozenset(f"{i.name}.{o}" for i in inst for o in KINDS[i.kind].UNMEASURED)
+    own = tuple(f"{i.name}.{c}" for i in inst for c in KINDS[i.kind].COMMANDS if f"{i.name}.{c}" not in commands)
     fed = [i for i in inst if i.kind == "storage" and any(j.options.get("storage") == i.name and
                                                          "storage_top" in j.options for j in inst)]
     buffer = None
@@ -137,7 +148,7 @@ def of(house="house1") -> Roles:
         n = b.options.get("sensors", 10) if isinstance(b.options.get("sensors"), int) else 10
         buffer = (b.name, float(b.params.volume), tuple(f"{b.name}.T_sensor_{k}" for k in range(1, n + 1)))
     return Roles(str(house), generators, circuits, chargers, commands, substitutes, unmeasured,
-                 catalogue_of(house), buffer, _subsystems(inst))
+                 catalogue_of(house), buffer, _subsystems(inst), loops, own)
 
 
 def _subsystems(inst) -> dict:

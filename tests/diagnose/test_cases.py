@@ -203,7 +203,7 @@ def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(t
     for p in nr["parameters"]:
         lo, hi = p["bounds"]
         assert lo <= p["fitted_value"] <= hi, p
-        q = next(q for q in calibration.NOMINAL_REFIT if q.key == p["name"])
+        q = next(q for q in calibration.knobs("house1") if q.key == p["name"])
         if q.bounds is not None:  # absolute bounds (port mixing around the file's ideal 0, the headers)
             assert (lo, hi) == q.bounds, p
             continue

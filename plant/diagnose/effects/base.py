@@ -89,6 +89,25 @@ class Effect:
         return {p.name: float(v) for p, v in zip(self.params, theta)}
 
 
+class UnitEffect(Effect):
+    """A candidate on every instance of the kinds it names (KINDS), whatever the house calls it:
+    `catalogue(house)` makes one per such instance, with `component` set to its name; its
+    overrides name the instance's own parameters through `key`."""
+    KINDS: tuple = ()
+
+    def __init__(self, component: str = ""):
+        self.component = component
+
+    def key(self, local: str) -> str:
+        return f"{self.component}.{local}"
+
+    def nominal(self, ctx, local: str) -> float:
+        """The instance's value of its parameter `local` in the replayed house file."""
+        from ...declaration import load
+
+        return float(getattr(load(ctx.roles.house).instances[self.component].params, local))
+
+
 REGISTRY: dict[str, type] = {}
 
 
@@ -99,5 +118,16 @@ def register(cls):
     return cls
 
 
-def catalogue() -> list[Effect]:
-    return [cls() for cls in REGISTRY.values()]
+def catalogue(house=None) -> list[Effect]:
+    """Every registered candidate; those bound to kinds (UnitEffect) once per instance of them in
+    `house` (none without a house)."""
+    from ...declaration import load
+
+    units = [i for i in load(house).instances.values()] if house is not None else []
+    out = []
+    for cls in REGISTRY.values():
+        if issubclass(cls, UnitEffect):
+            out += [cls(i.name) for i in units if i.kind in cls.KINDS]
+        else:
+            out.append(cls())
+    return out

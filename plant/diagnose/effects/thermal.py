@@ -9,7 +9,7 @@ class HeatLoss(Effect):
     id = "heat_loss"
     component = "storage"
     kind = "simulate"
-    # the range starts at the file's value: a loss below it is calibration (calibration.NOMINAL_REFIT),
+    # the range starts at the file's value: a loss below it is calibration (calibration.knobs: the kinds' KNOBS),
     # not a missing effect
     params = (Param("UA_loss", 20.0, 400.0, 20.0, "W/K", log=True),)
     description = "heat loss of the heating storage to the plant room (storage.UA_loss)"

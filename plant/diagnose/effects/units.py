@@ -1,0 +1,126 @@
+"""Candidates on units of any house, bound to their kinds (UnitEffect): a heat pump's capacity,
+COP and defrost share, a solar collector's optics, a floor's slab. Each is a factor on a
+parameter the kind already carries, so it is a line of a house file too (`P_heat_nom = ...`)."""
+from __future__ import annotations
+
+from .base import Param, UnitEffect, register
+
+HEAT_PUMPS = ("heat_pump_air", "heat_pump_brine")
+
+
+class _Factor(UnitEffect):
+    """One factor on the instance's parameters LOCALS (each times the factor)."""
+    kind = "simulate"
+    LOCALS: tuple = ()
+    WHAT = ""
+
+    def overrides(self, theta):
+        return {self.key(k): float(theta[0]) * self._file[k] for k in self.LOCALS}
+
+    def plausible(self, ctx):
+        self._file = {k: self.nominal(ctx, k) for k in self.LOCALS}
+        return True, ""
+
+    def summary(self, theta, ctx, sim=None):
+        return f"{self.component}: {self.WHAT} x {theta[0]:.3g} (nominal 1)"
+
+    def size(self, theta, ctx, sim=None):
+        return {"factor": float(theta[0])}
+
+
+class _Running(_Factor):
+    """A factor on a unit that must run in the recording to show it."""
+
+    def plausible(self, ctx):
+        super().plausible(ctx)
+        return self._runs(ctx)
+
+    def _runs(self, ctx):
+        if ctx.mode_share(f"{self.component}_on") < 0.01:
+            return False, f"the {self.component} (almost) never runs in the recording"
+        return True, ""
+
+
+@register
+class HeatPumpCapacity(_Running):
+    """Less heat at the same compressor power (refrigerant charge, a fouled evaporator or
+    condenser): the unit's heat output and its COP each x factor, its electric power as before."""
+    id = "heat_pump_capacity"
+    KINDS = HEAT_PUMPS
+    LOCALS = ("P_heat_nom", "COP_nom")
+    WHAT = "heat output at the same electric power"
+    params = (Param("factor", 0.4, 1.0, 1.0, "1"),)
+    description = "heat pump delivers less heat at the same electric power (P_heat_nom and COP_nom x factor)"
+
+
+@register
+class HeatPumpCOP(_Running):
+    """The same heat for more electricity (a worn compressor, a wrong expansion): COP x factor."""
+    id = "heat_pump_cop"
+    KINDS = HEAT_PUMPS
+    LOCALS = ("COP_nom",)
+    WHAT = "COP"
+    params = (Param("factor", 0.4, 1.0, 1.0, "1"),)
+    description = "heat pump needs more electricity for the same heat (COP_nom x factor)"
+
+
+@register
+class DefrostShare(_Running):
+    """An air-source unit that defrosts longer (iced evaporator, humid air): the share of its run
+    time below the defrost temperature with no heat, no power and no flow."""
+    id = "defrost_share"
+    KINDS = ("heat_pump_air",)
+    params = (Param("share", 1.0 / 30.0, 1.0 / 3.0, 1.0 / 30.0, "1 (of run time below T_defrost)"),)
+    description = "air-source heat pump defrosts for a larger share of its run time (t_defrost / t_defrost_period)"
+
+    def plausible(self, ctx):
+        # from the file's share up (a shorter defrost is no missing physics)
+        self._file = {k: self.nominal(ctx, k) for k in ("t_defrost", "t_defrost_period")}
+        share = self._file["t_defrost"] / self._file["t_defrost_period"]
+        self.params = (Param("share", share, max(1.0 / 3.0, share), share, "1 (of run time below T_defrost)"),)
+        return self._runs(ctx)
+
+    def overrides(self, theta):
+        return {self.key("t_defrost"): float(theta[0]) * self._file["t_defrost_period"]}
+
+    def summary(self, theta, ctx, sim=None):
+        return f"{self.component}: defrosts {theta[0] * 100:.1f} % of its run time below T_defrost"
+
+    def size(self, theta, ctx, sim=None):
+        return {"defrost_share": float(theta[0])}
+
+
+@register
+class CollectorDegradation(_Factor):
+    """A collector that converts less of the light (soiling, shading, aged absorber or glass)."""
+    id = "collector_degradation"
+    KINDS = ("solar_collector",)
+    LOCALS = ("eta0",)
+    WHAT = "optical efficiency"
+    params = (Param("factor", 0.2, 1.0, 1.0, "1"),)
+    description = "solar collector's optical efficiency reduced (soiling, shading, ageing: eta0 x factor)"
+
+
+@register
+class SlabCapacity(_Factor):
+    """A floor whose screed stores less or more heat than the file says (thinner screed, another
+    material): how slowly the floor's return and the room follow the supply."""
+    id = "slab_capacity"
+    KINDS = ("floor_heating",)
+    LOCALS = ("C_screed",)
+    WHAT = "screed heat capacity"
+    params = (Param("factor", 0.1, 3.0, 1.0, "1", log=True),)
+    description = "floor heating's screed heat capacity differs from the file (C_screed x factor)"
+
+
+@register
+class BrineSide(_Factor):
+    """A ground collector that gives less heat to its brine (air in the loop, a collector laid
+    too shallow or in dry soil): the brine-to-ground conductance x factor, so the brine, and with
+    it the unit's source and COP, run colder."""
+    id = "brine_side"
+    KINDS = ("ground_collector",)
+    LOCALS = ("UA",)
+    WHAT = "brine-to-ground conductance"
+    params = (Param("factor", 0.1, 1.0, 1.0, "1", log=True),)
+    description = "ground collector's brine-to-ground conductance reduced (ground collector UA x factor)"

@@ -1,0 +1,83 @@
+"""The diagnosis's calibration knobs and own commands come from the kinds (Knob, COMMANDS), never
+from a list of house 1's instance names."""
+import pytest
+
+from plant.diagnose import calibration
+from plant.diagnose.requirements import lines, requirements
+from plant.diagnose.roles import of as roles_of
+
+# house 1's re-fitted nominals as the diagnosis had them written by hand before the kinds
+# declared them (key, relative tolerance, absolute bounds, keys taking the same value, re-fitted
+# with each candidate, calibrated first on): the coordinate descents are order-sensitive, so the
+# order is part of it
+HOUSE1 = [
+    ("storage.UA_loss", 0.40, None, (), True, ()),
+    ("radiator.Q_nominal", 0.10, None, (), True, ()),
+    ("zone.H_direct", 0.10, None, (), True, ()),
+    ("switch.storage_inlet_mixing", 0.0, (0.0, 0.05), (), True, ()),
+    ("supply_header.V", 0.0, (0.005, 0.05), ("return_header.V",), False, ("switch.T_sup", "switch.T_ret")),
+    ("supply_header.UA_loss", 0.0, (0.0, 3.0), ("return_header.UA_loss",), False, ("switch.T_sup", "switch.T_ret")),
+    ("chp.V_water", 0.0, (0.0025, 0.03), (), False, ("chp.T_sup",)),
+    ("dhw_pump.UA", 0.25, None, (), False, tuple(f"dhw_storage.T_sensor_{k}" for k in range(1, 11))),
+]
+
+
+def test_house1_knobs_are_the_ones_written_by_hand_before_in_their_order():
+    got = [(q.key, q.rel, q.bounds, q.also, q.joint, q.signals) for q in calibration.knobs("house1")]
+    assert got == HOUSE1
+    assert all(q.why for q in calibration.knobs("house1"))
+
+
+def test_house2_knobs_are_named_for_its_own_instances_and_links():
+    keys = [q.key for q in calibration.knobs("house2")]
+    # one storage loss although two coupling points feed the storage; each point's headers
+    assert keys.count("storage.UA_loss") == 1
+    assert {"floor.Q_nominal", "zone.H_direct", "switch.storage_inlet_mixing", "heating.storage_inlet_mixing",
+            "supply_header.V", "heating_supply.V", "heat_pump.dT"} <= set(keys)
+    hp = next(q for q in calibration.knobs("house2") if q.key == "heat_pump.dT")
+    assert hp.signals == ("heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow") and not hp.joint
+    header = next(q for q in calibration.knobs("house2") if q.key == "heating_supply.V")
+    assert header.also == ("heating_return.V",) and header.signals == ("heating.T_sup", "heating.T_ret")
+    # the bounds come from the house file's values
+    params = {p.name: p for p in calibration.nominal_params("house2")}
+    assert params["heat_pump.dT"].lo == pytest.approx(4.0) and params["heat_pump.dT"].hi == pytest.approx(6.0)
+
+
+def test_a_solar_stations_own_pump_is_replayed_where_recorded_and_its_loop_has_pipe_sensors():
+    r = roles_of("house2")
+    assert r.own_commands == ("solar.on", "solar.m_flow_set")
+    assert not set(r.own_commands) & set(r.commands)
+    assert r.pipes["solar.T_sup"] == ("solar.m_flow", "solar.on", 0.5)
+    text = "\n".join(lines(requirements("house2")))
+    assert "commands of a unit's own control (optional" in text and "  solar.on" in text
+    # a house without one lists no such heading
+    assert roles_of("house1").own_commands == ()
+    assert "own control" not in "\n".join(lines(requirements("house1")))
+
+
+class _Rec:
+    def __init__(self, names):
+        self.names = set(names)
+
+    def has(self, s):
+        return s in self.names
+
+
+def test_the_replay_drives_an_own_command_only_when_the_recording_has_it():
+    r = roles_of("house2")
+    assert r.replayed(_Rec(r.commands)) == r.commands
+    assert r.replayed(_Rec((*r.commands, "solar.on"))) == (*r.commands, "solar.on")
+
+
+def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
+    from plant.diagnose.effects import catalogue
+
+    units = lambda house: {(e.id, e.component) for e in catalogue(house) if getattr(e, "KINDS", ())}  # noqa: E731
+    assert units("house2") == {("heat_pump_capacity", "heat_pump"), ("heat_pump_cop", "heat_pump"),
+                               ("defrost_share", "heat_pump"), ("collector_degradation", "solar"),
+                               ("slab_capacity", "floor")}
+    # a ground-source unit has no defrost; house 1 has none of these kinds
+    assert ("defrost_share", "heat_pump") not in units("house3") and ("heat_pump_cop", "heat_pump") in units("house3")
+    assert ("brine_side", "ground") in units("house3")
+    assert units("house1") == set()
+    assert {e.id for e in catalogue()} == {e.id for e in catalogue("house1")}
