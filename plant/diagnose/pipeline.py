@@ -69,7 +69,15 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
     requirements.check_house(house)
     warnings = list(rec.warnings) + requirements.check(rec, house)
     rp = replay.Replayer(rec, house, require_cut=require_cut)
-    ctx = Context.build(rec, train_days=train_days, simulated=rp.simulated, roles=rp.roles)
+    simulated = rp.simulated
+    for unit, runs in rp.roles.unfollowed(rec.data).items():
+        # its command is still replayed (its heat is as recorded, near none); its own signals
+        # follow what the replay cannot: not compared, and said so
+        simulated = {s for s in simulated if s.split(".", 1)[0] != unit}
+        warnings.append(f"{unit}: its recorded command runs {runs} times, each one sample long: it switches "
+                        f"faster than the recording's scan, which a replay cannot follow; its signals are "
+                        f"not compared (record its command or flow faster, or as a run-time count)")
+    ctx = Context.build(rec, train_days=train_days, simulated=simulated, roles=rp.roles)
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
 
 

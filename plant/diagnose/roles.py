@@ -23,6 +23,9 @@ import numpy as np
 from ..kinds import KINDS
 
 
+MIN_PULSES = 3   # one or two single-sample runs may be a unit's real short run, three are a pattern
+
+
 @dataclass(frozen=True)
 class Unit:
     name: str                 # the instance
@@ -95,6 +98,23 @@ class Roles:
         """Pipe sensor -> (its branch's flow, the command that starts the branch, its threshold)."""
         return {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits, *self.loops)
                 for p in u.pipes}
+
+    def unfollowed(self, data) -> dict:
+        """Loop (a unit with its own control) -> its number of runs, for each loop whose recorded
+        command runs are, by the median, one sample long (at least MIN_PULSES of them): it
+        switches faster than the recording is scanned, so a replay holding the command between
+        samples cannot follow it (a solar station's pump that pulses for seconds while cold loop
+        water cools the collector)."""
+        out = {}
+        for u in self.loops:
+            on = np.nan_to_num(np.asarray(data.get(u.command, ()), float)) > u.on_above
+            if on.size == 0:
+                continue
+            edges = np.flatnonzero(np.diff(np.concatenate(([0], on.astype(np.int8), [0]))))
+            lengths = edges[1::2] - edges[::2]
+            if lengths.size >= MIN_PULSES and np.median(lengths) <= 1:
+                out[u.name] = int(lengths.size)
+        return out
 
     def replayed(self, rec) -> tuple:
         """The commands a replay drives from `rec`: its controllers' (all required) and the kinds'

@@ -81,3 +81,19 @@ def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
     assert ("brine_side", "ground") in units("house3")
     assert units("house1") == set()
     assert {e.id for e in catalogue()} == {e.id for e in catalogue("house1")}
+
+
+def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_runs_is_not():
+    import numpy as np
+
+    r = roles_of("house2")
+    pulses = np.zeros(600)
+    pulses[[50, 120, 200, 333]] = 1.0          # four runs, each one sample long
+    runs = np.zeros(600)
+    runs[50:80] = runs[200:260] = runs[400:403] = 1.0
+    two = np.zeros(600)
+    two[[50, 300]] = 1.0                        # two short runs: not yet a pattern
+    assert r.unfollowed({"solar.on": pulses}) == {"solar": 4}
+    assert r.unfollowed({"solar.on": runs}) == {}
+    assert r.unfollowed({"solar.on": two}) == {}
+    assert r.unfollowed({}) == {}
