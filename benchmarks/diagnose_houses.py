@@ -25,7 +25,11 @@ NOT_YET = {"house3": "no clean-room rig simulator of house 3 yet (docs/lab/house
 # named effect -> (its estimate from report.json, the truth's key in meta.json sizes)
 SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_UA_W_per_K"),
          "sensor_offset": (lambda r: r["parameters"]["offset"]["value"], "offset_K"),
-         "sensor_lag": (lambda r: r["parameters"]["tau"]["value"], "tau_s")}
+         "sensor_lag": (lambda r: r["parameters"]["tau"]["value"], "tau_s"),
+         "heat_pump_capacity": (lambda r: r["parameters"]["factor"]["value"], "capacity_factor"),
+         "defrost_share": (lambda r: r["parameters"]["share"]["value"], "defrost_share"),
+         "collector_degradation": (lambda r: r["parameters"]["factor"]["value"], "eta0_factor"),
+         "slab_capacity": (lambda r: r["parameters"]["factor"]["value"], "factor")}
 
 
 def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:

@@ -240,11 +240,12 @@ class _HeatPump(Generator):
     RUN, RAN, PIPES = ("on", 0.5), ("Q_flow", 500.0), ("T_sup", "T_ret")
     # The unit's pump runs at the flow that gives the fixed spread at its output; a rig's pump
     # sets its own (house 2's rig description: 5 K within 4 ... 6 K), which moves the unit's
-    # outlet and return by a kelvin and its flow by a fifth. Calibrated first on the unit's own
-    # sensors and flow, once: the capacity and defrost candidates move its heat, not its spread.
-    KNOBS = (Knob("dT", "K", "the unit's water-side spread (its pump's flow): its outlet and return "
-                  "temperatures and flow at a given heat", rel=0.20, rank=6, joint=False,
-                  signals=("T_sup", "T_ret", "m_flow")),)
+    # outlet and return by a kelvin and its flow by a fifth. Calibrated first on the unit's flow
+    # alone, once: the pump's flow is what it stands for (a capacity loss shrinks the spread at
+    # the same flow, so calibrated on the temperatures it would take that loss for its own).
+    KNOBS = (Knob("dT", "K", "the unit's water-side spread at its heat (its pump's flow): its flow, and "
+                  "through it its outlet and return temperatures", rel=0.20, rank=6, joint=False,
+                  signals=("m_flow",)),)
 
     def initial_state(self, inst):
         return initial_state(inst.params)

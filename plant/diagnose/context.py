@@ -76,6 +76,7 @@ class Context:
     alone: dict | None = None
     calibrated: tuple = ()
     nominal_ranges: dict = field(default_factory=dict)
+    calibration: dict = field(default_factory=dict)  # override key -> the value every replay starts from
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None, roles=None):
@@ -113,10 +114,12 @@ class Context:
         return cls(rec, measured, train, held, meas, ok, scale, noise, roles.flags(rec.data),
                    cols=np.array([roles.catalogue.index(s) for s in measured]), t_split=t_split, roles=roles)
 
-    def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict) -> "Context":
+    def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict,
+                      calibration: dict | None = None) -> "Context":
         """This context judged against the nominal replay `nominal` (a replay.Replay)."""
         return dataclasses.replace(self, nominal=nominal, nominal_sim=nominal.rows[:, self.cols], alone=alone,
-                                   calibrated=tuple(calibrated), nominal_ranges=dict(nominal_ranges))
+                                   calibrated=tuple(calibrated), nominal_ranges=dict(nominal_ranges),
+                                   calibration=dict(calibration or {}))
 
     @property
     def heights(self) -> dict:

@@ -118,7 +118,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
                                            for q in nref["parameters"]))
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
     alone = {"instances": {"mixer"}, "signals": list(replay.cut_mod.CIRCUIT_OUTPUTS)} if rp.circuit else None
-    ctx = ctx.with_baseline(nominal, alone, calibrated, ranges)
+    ctx = ctx.with_baseline(nominal, alone, calibrated, ranges, rp.base)
     J0t, J0h = ctx.cost(ctx.nominal_sim, ctx.train), ctx.cost(ctx.nominal_sim, ctx.held)
     log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "
         f"({len(ctx.measured)} measured signals)")

@@ -18,7 +18,8 @@ class _Factor(UnitEffect):
         return {self.key(k): float(theta[0]) * self._file[k] for k in self.LOCALS}
 
     def plausible(self, ctx):
-        self._file = {k: self.nominal(ctx, k) for k in self.LOCALS}
+        # a factor on the calibrated twin's value (the nominal re-fit's, else the file's)
+        self._file = {k: ctx.calibration.get(self.key(k), self.nominal(ctx, k)) for k in self.LOCALS}
         return True, ""
 
     def summary(self, theta, ctx, sim=None):
@@ -44,10 +45,12 @@ class _Running(_Factor):
 @register
 class HeatPumpCapacity(_Running):
     """Less heat at the same compressor power (refrigerant charge, a fouled evaporator or
-    condenser): the unit's heat output and its COP each x factor, its electric power as before."""
+    condenser): the unit's heat output and its COP each x factor, its electric power as before.
+    Its water pump keeps its flow, so the water-side spread shrinks with the heat (the kind sets
+    the flow from the heat and the spread)."""
     id = "heat_pump_capacity"
     KINDS = HEAT_PUMPS
-    LOCALS = ("P_heat_nom", "COP_nom")
+    LOCALS = ("P_heat_nom", "COP_nom", "dT")
     WHAT = "heat output at the same electric power"
     params = (Param("factor", 0.4, 1.0, 1.0, "1"),)
     description = "heat pump delivers less heat at the same electric power (P_heat_nom and COP_nom x factor)"
