@@ -23,29 +23,28 @@ from ..tank import at_height, tank_multi  # house 1's column and sensor heights
 from .layout import (
     A_BOI_STATE, A_HP_STATE, A_M_HP, A_M_PRIM, A_M_SOL, A_Q_SLAB, A_SHARE_UP, A_VALVE, CP,
     C_ASHP_ASHP_on, C_ASHP_A_V3_TL, C_ASHP_AuxModulation_set, C_ASHP_Modulation_set, C_BT0,
-    C_CB_P_gas, C_CB_P_heat, C_CB_S_FW, C_CB_S_TM_RL, C_CB_S_TM_VL, C_DiffuseRadiation_W_per_m2,
-    C_DirectRadiation_W_per_m2, C_EB_EB_power_kW_set, C_HP_COP, C_HP_P_elec_is, C_HP_P_heat_Tot,
-    C_HP_S_FW_HC, C_HP_S_TM_RL, C_HP_S_TM_VL, C_HS_S_FW_HW, C_PV_P_gen, C_P_elConsumption_kW,
-    C_SFW_HCRLbM_Set_l_per_min, C_SFW_HCRLbM_l_per_min, C_SFW_HCVLbM_l_per_min, C_STM_HCRL_degC,
-    C_STM_HCVLaM_Set_degC, C_STM_HCVLaM_degC, C_STM_HCVLbM_degC, C_ST_PUMP_CMD, C_ST_P_heat,
-    C_ST_S_FW_ST_VL, C_ST_S_FW_ST_VL_set, C_ST_S_TM_COLL, C_ST_S_TM_RL, C_ST_S_TM_VL,
-    C_S_TM_ambient, C_S_TM_room, C_TS_S_TM_PS_RL, C_TS_S_TM_PS_VL, F_BOI_TOFF, F_BOI_TON, F_HC_FSET,
-    F_HP_TON, F_SOL_SET, F_VALVE_X, I_AUX_CMD, I_BOI_CMD, I_HP_CMD, I_HP_RUN, I_SOL_CMD, I_VALVE,
-    L_AMB, L_BUILDING, L_COLLOSS, L_DEFROST, L_DHW, L_E0, L_E1, L_EL, L_GAS, L_GENLOSS, L_HP_ELC,
-    L_HP_HEAT, L_HP_RUN, L_LEAK_MASS, L_PIPELOSS, L_SOLABS, L_SOL_HEAT, L_SOL_RUN, L_STORELOSS,
-    L_TMAX, L_TMIN, N_BOI, N_CB_RL, N_CB_VL, N_CH, N_COL, N_FS, N_HCR, N_HCS, N_HC_RL, N_HC_VL,
-    N_HP, N_HPR_PIPE, N_HPS_PIPE, N_HP_RL, N_HP_VL, N_IS, N_MASS, N_PROBE, N_RH, N_ROOM, N_SH,
-    N_SLAB, N_SPR, N_SPS, PR_CB_RL, PR_CB_VL, PR_COLL, PR_HC_HDR, PR_HC_RL, PR_HC_VL, PR_HP_RL,
-    PR_HP_VL, PR_PS_RL, PR_PS_VL, PR_ROOM, PR_ST_RL, PR_ST_VL, P_BOI_UA, P_B_CM, P_B_CR, P_B_HMO,
-    P_B_HRM, P_B_HRO, P_B_NPERS, P_B_WPERS, P_COL_A, P_COL_A1, P_COL_A2, P_COL_ETA0, P_DT,
-    P_FL_C_SEG, P_FL_K, P_FL_N, P_FL_UA_SEG, P_HC_TSET, P_HDR_UA, P_HPP_UA, P_HP_UA, P_KCOND,
-    P_M_CELL, P_PV_KWP, P_SOL_C_SEG, P_SOL_PIPE_UA, P_SOL_PUMP_F, P_SOL_UA_SEG, P_TAU_COLL,
-    P_TAU_PROBE, P_TAU_ROOM, P_T_COLD, P_T_DHW, P_T_PLANT, S_CB_RL, S_CB_VL, S_HC_RL, S_HC_VL,
-    S_HP_RL, S_HP_VL,
+    C_CB_P_gas, C_CB_P_heat, C_CB_S_FW, C_CB_S_TM_RL, C_CB_S_TM_VL,
+    C_DiffuseRadiation_W_per_m2, C_DirectRadiation_W_per_m2, C_EB_EB_power_kW_set, C_HP_COP,
+    C_HP_P_elec_is, C_HP_P_heat_Tot, C_HP_S_FW_HC, C_HP_S_TM_RL, C_HP_S_TM_VL, C_HS_S_FW_HW,
+    C_PV_P_gen, C_P_elConsumption_kW, C_SFW_HCRLbM_Set_l_per_min, C_SFW_HCRLbM_l_per_min,
+    C_SFW_HCVLbM_l_per_min, C_STM_HCRL_degC, C_STM_HCVLaM_Set_degC, C_STM_HCVLaM_degC,
+    C_STM_HCVLbM_degC, C_ST_PUMP_CMD, C_ST_P_heat, C_ST_S_FW_ST_VL, C_ST_S_FW_ST_VL_set,
+    C_ST_S_TM_COLL, C_ST_S_TM_RL, C_ST_S_TM_VL, C_S_TM_ambient, C_S_TM_room, C_TS_S_TM_PS_RL,
+    C_TS_S_TM_PS_VL, F_BOI_TOFF, F_BOI_TON, F_HC_FSET, F_HP_TON, F_SOL_SET, F_VALVE_X,
+    I_AUX_CMD, I_BOI_CMD, I_HP_CMD, I_HP_RUN, I_SOL_CMD, I_VALVE, L_AMB, L_BUILDING, L_COLLOSS,
+    L_DEFROST, L_DHW, L_E0, L_E1, L_EL, L_GAS, L_GENLOSS, L_HP_ELC, L_HP_HEAT, L_HP_RUN,
+    L_LEAK_MASS, L_PIPELOSS, L_SOLABS, L_SOL_HEAT, L_SOL_RUN, L_STORELOSS, L_TMAX, L_TMIN,
+    N_BOI, N_CB_RL, N_CB_VL, N_CH, N_COL, N_FS, N_HCR, N_HCS, N_HC_RL, N_HC_VL, N_HP,
+    N_HPR_PIPE, N_HPS_PIPE, N_HP_RL, N_HP_VL, N_IS, N_PROBE, N_RH, N_ROOM, N_SH, N_SPR, N_SPS,
+    PR_CB_RL, PR_CB_VL, PR_COLL, PR_HC_HDR, PR_HC_RL, PR_HC_VL, PR_HP_RL, PR_HP_VL, PR_PS_RL,
+    PR_PS_VL, PR_ROOM, PR_ST_RL, PR_ST_VL, P_BOI_UA, P_B_NPERS, P_B_WPERS, P_COL_A, P_COL_A1,
+    P_COL_A2, P_COL_ETA0, P_DT, P_HC_TSET, P_HDR_UA, P_HPP_UA, P_HP_UA, P_KCOND, P_M_CELL,
+    P_PV_KWP, P_SOL_C_SEG, P_SOL_PIPE_UA, P_SOL_PUMP_F, P_SOL_UA_SEG, P_TAU_COLL, P_TAU_PROBE,
+    P_TAU_ROOM, P_T_COLD, P_T_DHW, P_T_PLANT, S_CB_RL, S_CB_VL, S_HP_RL, S_HP_VL,
 )
-from .nodes import adv, stored_heat
+from .nodes import adv, coil_chain, stored_heat
 from .plc import plc
-from .units import boiler_step, heat_pump_step, mixing_step, valve_step
+from .units import boiler_step, heat_pump_step, heating_step, mixing_step, valve_step
 
 
 @njit(cache=True)
@@ -61,7 +60,6 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
     dt = P[P_DT]
     n = Tt.size
     nc = Tc.size
-    nf = Tf.size
     T_pl = P[P_T_PLANT]
     S = np.zeros(n)
     SE = np.zeros(n)
@@ -157,40 +155,11 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         b5 = adv(nodes, C_nodes, N_SH, m_b, nodes[N_CB_VL], 0.0, P[P_HDR_UA], T_pl, dt)
         ploss += b1 + b2 + b4 + b5
         genloss += b3 + P_gas - Q_b
-        # heating circuit: return pipe (sensor), header, mixer + supply pipe (sensor), floor
-        # segments; the last floor segment is the loop's explicit node (leaves at its old state)
-        T_last_old = Tf[nf - 1]
-        h3 = adv(nodes, C_nodes, N_HC_RL, m_hc, T_last_old, 0.0, s_UA[S_HC_RL], T_pl, dt)
-        h4 = adv(nodes, C_nodes, N_HCR, m_p, nodes[N_HC_RL], 0.0, P[P_HDR_UA], T_pl, dt)
-        h1 = adv(nodes, C_nodes, N_HCS, m_p, Tt[k_hc_out], 0.0, P[P_HDR_UA], T_pl, dt)
-        T_mix_in = ((m_p * nodes[N_HCS] + (m_hc - m_p) * nodes[N_HC_RL]) / m_hc if m_hc > 0.0
-                    else nodes[N_HC_RL])
-        h2 = adv(nodes, C_nodes, N_HC_VL, m_hc, T_mix_in, 0.0, s_UA[S_HC_VL], T_pl, dt)
-        T_prev = nodes[N_HC_VL]
-        Q_slab_in = 0.0
-        T_slab = nodes[N_SLAB]
-        for j in range(nf - 1):
-            Tn = ((P[P_FL_C_SEG] * Tf[j] + dt * (m_hc * CP * T_prev + P[P_FL_UA_SEG] * T_slab))
-                  / (P[P_FL_C_SEG] + dt * (m_hc * CP + P[P_FL_UA_SEG])))
-            Q_slab_in += P[P_FL_UA_SEG] * (Tn - T_slab)
-            Tf[j] = Tn
-            T_prev = Tn
-        q_l = P[P_FL_UA_SEG] * (T_last_old - T_slab)
-        Q_slab_in += q_l
-        Tf[nf - 1] = T_last_old + dt / P[P_FL_C_SEG] * (m_hc * CP * (T_prev - T_last_old) - q_l)
-        ploss += h1 + h2 + h3 + h4
-        # slab and building
-        dTs = T_slab - nodes[N_ROOM]
-        Q_emit = P[P_FL_K] * (abs(dTs) ** P[P_FL_N]) * (1.0 if dTs >= 0.0 else -1.0)
-        nodes[N_SLAB] = T_slab + dt / C_nodes[N_SLAB] * (Q_slab_in - Q_emit)
-        T_r = nodes[N_ROOM]
-        T_m = nodes[N_MASS]
-        Q_win = in_gwin[k]
-        Q_int = P[P_B_NPERS] * P[P_B_WPERS] * in_pres[k] + in_Phouse[k]
-        q_rm = P[P_B_HRM] * (T_r - T_m)
-        nodes[N_ROOM] = T_r + dt / P[P_B_CR] * (Q_emit + 0.5 * Q_win + Q_int - q_rm
-                                                 - P[P_B_HRO] * (T_r - T_out))
-        nodes[N_MASS] = T_m + dt / P[P_B_CM] * (q_rm + 0.5 * Q_win - P[P_B_HMO] * (T_m - T_out))
+        # heating circuit and building (house2/units.py's heating_step)
+        hl, Q_emit = heating_step(P, nodes, C_nodes, s_UA, Tf, m_hc, m_p, Tt[k_hc_out], T_pl, T_out,
+                                  in_gwin[k], P[P_B_NPERS] * P[P_B_WPERS] * in_pres[k]
+                                  + in_Phouse[k], dt)
+        ploss += hl
         # solar loop: collector (implicit, fed by the explicit return pipe), supply pipe, coil
         T_spr_old = nodes[N_SPR]
         dTc = nodes[N_COL] - T_out
@@ -200,18 +169,8 @@ def run(P, Tt, Tc, Tf, nodes, C_nodes, s_UA, sens_pos, sens_tau,
         s1 = adv(nodes, C_nodes, N_SPS, m_s, nodes[N_COL], 0.0, P[P_SOL_PIPE_UA], T_out, dt)
         for j in range(n):
             Qt[j] = 0.0
-        T_prev = nodes[N_SPS]
-        for kk in range(nc):
-            Tb = 0.0
-            for j in range(n):
-                Tb += coil_W[kk, j] * Tt[j]
-            Tn = ((P[P_SOL_C_SEG] * Tc[kk] + dt * (m_s * CP * T_prev + P[P_SOL_UA_SEG] * Tb))
-                  / (P[P_SOL_C_SEG] + dt * (m_s * CP + P[P_SOL_UA_SEG])))
-            q = P[P_SOL_UA_SEG] * (Tn - Tb)
-            for j in range(n):
-                Qt[j] += coil_W[kk, j] * q
-            Tc[kk] = Tn
-            T_prev = Tn
+        T_prev = coil_chain(Tc, 0, nc, coil_W, Tt, m_s, nodes[N_SPS], P[P_SOL_UA_SEG],
+                            P[P_SOL_C_SEG], Qt, dt)
         s2 = P[P_SOL_PIPE_UA] * (T_spr_old - T_out)
         nodes[N_SPR] = T_spr_old + dt / C_nodes[N_SPR] * (m_s * CP * (T_prev - T_spr_old) - s2)
         ploss += s1 + s2

@@ -117,12 +117,12 @@ _EFFECT_FIELDS = {   # effect: (Effects attribute, key of its value)
 
 
 # ------------------------------------------------------------------ inputs
-@lru_cache(maxsize=1)
-def _raw():
+@lru_cache(maxsize=2)
+def _raw(dhw_file="SF2_wholeyear_Vdot.txt"):
     w = table("Weather_2021_Munich_15min.txt", "Weather")
     pres = table("presenceResidential.txt", "presence")
     el = table("elPower.txt", "Pel")
-    return w, pres, el, dhwcalc_minutes("SF2_wholeyear_Vdot.txt")
+    return w, pres, el, dhwcalc_minutes(dhw_file)
 
 
 def _sun(t_utc):
@@ -138,9 +138,13 @@ def _sun(t_utc):
     return cz, ci
 
 
-def minute_inputs(t0_abs: float, n_min: int) -> dict:
-    """One value per minute from t0_abs (seconds since 1 Jan 00:00 CET of 2021)."""
-    w, pres, el, tap = _raw()
+def minute_inputs(t0_abs: float, n_min: int, dhw_file: str = "SF2_wholeyear_Vdot.txt",
+                  litres_per_day: float = 300.0, el_factor: float = 7.0,
+                  window_m2: float = 12.6) -> dict:
+    """One value per minute from t0_abs (seconds since 1 Jan 00:00 CET of 2021). The defaults are
+    house 2's (DHWcalc series, l/day at the tap, household electricity = the 1000 kWh/a profile x
+    el_factor, window area); house 3 passes its own."""
+    w, pres, el, tap = _raw(dhw_file)
     Y = 365 * 86400
     t = t0_abs + 60.0 * np.arange(n_min) + 30.0
     t_utc = t - 3600.0
@@ -160,11 +164,11 @@ def minute_inputs(t0_abs: float, n_min: int) -> dict:
     G_abs = Eb_t * iam_b + (Ed_t + Eg_t) * iam_d
     G_tilt = Eb_t + Ed_t + Eg_t
     presence = np.clip(np.interp(np.mod(t, Y), pres[:, 0], pres[:, 1]), 0.0, 1.0)
-    P_house = 7.0 * np.interp(np.mod(t, Y), el[:, 0], el[:, 1])
+    P_house = el_factor * np.interp(np.mod(t, Y), el[:, 0], el[:, 1])
     minute = np.floor((t - 30.0) / 60.0).astype(np.int64) % tap.size
-    scale = 300.0 / (tap.sum() / 60.0 / 365.0)
+    scale = litres_per_day / (tap.sum() / 60.0 / 365.0)
     q_tap = tap[minute] * scale / 3600.0
-    g_win = 12.6 * (0.45 * E_dir + 0.5 * E_dif)
+    g_win = window_m2 * (0.45 * E_dir + 0.5 * E_dif)
     return dict(T_out=T_out, E_dir=E_dir, E_dif=E_dif, G_abs=G_abs, G_tilt=G_tilt,
                 presence=presence, P_house=P_house, q_tap=q_tap, g_win=g_win)
 

@@ -1,5 +1,6 @@
-"""Small numerical helpers of rigsim's house-2 core: a bilinear table lookup, the implicit update of
-one node of a flow chain, and the heat held by the hydronic system."""
+"""Small numerical helpers of rigsim's house-2 core (house 3's too): a bilinear table lookup, the
+implicit update of one node of a flow chain, a coil's segments in series, and the heat held by the
+hydronic system."""
 from __future__ import annotations
 
 import numpy as np
@@ -56,3 +57,24 @@ def stored_heat(P, nodes, C_nodes, Tt, Tc, Tf):
         if i != N_ROOM and i != N_MASS:
             e += C_nodes[i] * nodes[i]
     return e
+
+
+@njit(cache=True)
+def coil_chain(Tc, lo, hi, coil_W, Tt, m, T_in, UA_seg, C_seg, Qt, dt):
+    """Segments lo ... hi-1 of Tc, a tank coil in series from its inlet (flow m [kg/s] at T_in),
+    each implicit against the tank cells it lies over (weights coil_W[segment, cell]); adds their
+    heat to Qt [W per cell] and returns the coil's outlet temperature."""
+    n = Tt.size
+    T_prev = T_in
+    for kk in range(lo, hi):
+        Tb = 0.0
+        for j in range(n):
+            Tb += coil_W[kk, j] * Tt[j]
+        Tn = ((C_seg * Tc[kk] + dt * (m * CP * T_prev + UA_seg * Tb))
+              / (C_seg + dt * (m * CP + UA_seg)))
+        q = UA_seg * (Tn - Tb)
+        for j in range(n):
+            Qt[j] += coil_W[kk, j] * q
+        Tc[kk] = Tn
+        T_prev = Tn
+    return T_prev

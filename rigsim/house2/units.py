@@ -1,6 +1,8 @@
 """House 2's unit steps, out of `run` (rigsim/house2/core.py): the heat pump, the three-way valve,
-the boiler and the heating circuit's mixing station. Each is one step of the loop, verbatim; the
-state arrays (ist, fst) are mutated in place and the scalars the rest of the step uses returned.
+the boiler, the heating circuit's mixing station, and the heating circuit with the floor and the
+building. Each is one step of the loop, verbatim; the state arrays (ist, fst, nodes) are mutated in
+place and the scalars the rest of the step uses returned. House 3 (rigsim/house3) calls the valve,
+the mixing station and the heating circuit too (its layout extends this one's).
 """
 from __future__ import annotations
 
@@ -10,11 +12,13 @@ from ..tank import interp1
 from .layout import (
     CP, F_BOI_M, F_BOI_MSTOP, F_BOI_TOFF, F_BOI_TON, F_BOI_Y, F_HC_FSET, F_HP_TON, F_HP_Y, F_U,
     F_U_I, F_VALVE_X, I_AUX_CMD, I_BOI_CMD, I_BOI_LOCK, I_BOI_RUN, I_HP_CMD, I_HP_RUN, I_VALVE,
-    N_CB_RL, N_HP_RL, PR_HC_HDR, PR_HC_RL, PR_HC_VL, P_BOI_DTSET, P_BOI_ETAF, P_HC_KI,
+    N_CB_RL, N_HCR, N_HCS, N_HC_RL, N_HC_VL, N_HP_RL, N_MASS, N_ROOM, N_SLAB, PR_HC_HDR,
+    PR_HC_RL, PR_HC_VL, P_BOI_DTSET, P_BOI_ETAF, P_B_CM, P_B_CR, P_B_HMO, P_B_HRM, P_B_HRO,
+    P_FL_C_SEG, P_FL_K, P_FL_N, P_FL_UA_SEG, P_HC_KI, P_HDR_UA,
     P_HC_PUMP_MAX, P_HC_TSET, P_HC_T_RUN, P_HP_AUX_W, P_HP_CAPF, P_HP_DEFROST_S, P_HP_MMAX_FLOW,
-    P_HP_MMIN_FLOW, P_HP_PNOM, P_HP_QNOM, P_HP_SPREAD, P_LEAK, P_VALVE_T,
+    P_HP_MMIN_FLOW, P_HP_PNOM, P_HP_QNOM, P_HP_SPREAD, P_LEAK, P_VALVE_T, S_HC_RL, S_HC_VL,
 )
-from .nodes import interp2
+from .nodes import adv, interp2
 
 
 @njit(cache=True)
@@ -143,3 +147,43 @@ def mixing_step(P, fst, pr, dt):
     fst[F_U] += min(lim, max(-lim, du))
     m_p = fst[F_U] * m_hc
     return m_hc, m_p
+
+
+@njit(cache=True)
+def heating_step(P, nodes, C_nodes, s_UA, Tf, m_hc, m_p, T_tank_out, T_pl, T_out, Q_win, Q_int,
+                 dt):
+    """One step of the heating circuit (return pipe and sensor water, headers, mixer, supply
+    sensor water, floor segments; the last floor segment is the loop's explicit node, leaving at
+    its old state), the slab and the building (room and envelope mass, window gains Q_win half
+    each, internal gains Q_int to the room); returns (pipe and header losses, slab-to-room heat)."""
+    nf = Tf.size
+    T_last_old = Tf[nf - 1]
+    h3 = adv(nodes, C_nodes, N_HC_RL, m_hc, T_last_old, 0.0, s_UA[S_HC_RL], T_pl, dt)
+    h4 = adv(nodes, C_nodes, N_HCR, m_p, nodes[N_HC_RL], 0.0, P[P_HDR_UA], T_pl, dt)
+    h1 = adv(nodes, C_nodes, N_HCS, m_p, T_tank_out, 0.0, P[P_HDR_UA], T_pl, dt)
+    T_mix_in = ((m_p * nodes[N_HCS] + (m_hc - m_p) * nodes[N_HC_RL]) / m_hc if m_hc > 0.0
+                else nodes[N_HC_RL])
+    h2 = adv(nodes, C_nodes, N_HC_VL, m_hc, T_mix_in, 0.0, s_UA[S_HC_VL], T_pl, dt)
+    T_prev = nodes[N_HC_VL]
+    Q_slab_in = 0.0
+    T_slab = nodes[N_SLAB]
+    for j in range(nf - 1):
+        Tn = ((P[P_FL_C_SEG] * Tf[j] + dt * (m_hc * CP * T_prev + P[P_FL_UA_SEG] * T_slab))
+              / (P[P_FL_C_SEG] + dt * (m_hc * CP + P[P_FL_UA_SEG])))
+        Q_slab_in += P[P_FL_UA_SEG] * (Tn - T_slab)
+        Tf[j] = Tn
+        T_prev = Tn
+    q_l = P[P_FL_UA_SEG] * (T_last_old - T_slab)
+    Q_slab_in += q_l
+    Tf[nf - 1] = T_last_old + dt / P[P_FL_C_SEG] * (m_hc * CP * (T_prev - T_last_old) - q_l)
+    # slab and building
+    dTs = T_slab - nodes[N_ROOM]
+    Q_emit = P[P_FL_K] * (abs(dTs) ** P[P_FL_N]) * (1.0 if dTs >= 0.0 else -1.0)
+    nodes[N_SLAB] = T_slab + dt / C_nodes[N_SLAB] * (Q_slab_in - Q_emit)
+    T_r = nodes[N_ROOM]
+    T_m = nodes[N_MASS]
+    q_rm = P[P_B_HRM] * (T_r - T_m)
+    nodes[N_ROOM] = T_r + dt / P[P_B_CR] * (Q_emit + 0.5 * Q_win + Q_int - q_rm
+                                             - P[P_B_HRO] * (T_r - T_out))
+    nodes[N_MASS] = T_m + dt / P[P_B_CM] * (q_rm + 0.5 * Q_win - P[P_B_HMO] * (T_m - T_out))
+    return h1 + h2 + h3 + h4, Q_emit
