@@ -1,10 +1,11 @@
-"""The case suite: recordings of house 1's rig (default) or house 2's rig with concealed effects.
+"""The case suite: recordings of house 1's rig (default), house 2's or house 3's with concealed
+effects.
 
-    python -m rigsim.suite [--house house1|house2] --out DIR [--realisation R] [--days 7]
+    python -m rigsim.suite [--house house1|house2|house3] --out DIR [--realisation R] [--days 7]
                            [--start 2021-01-10] [--case NAME ...] [--list]
 
-writes DIR/<case>/recording.csv, columns.toml and meta.json for each case. House 2's cases are
-in rigsim/house2/suite.py.
+writes DIR/<case>/recording.csv, columns.toml and meta.json for each case. House 2's and house
+3's cases are in rigsim/house2/suite.py and rigsim/house3/suite.py.
 """
 from __future__ import annotations
 
@@ -155,13 +156,14 @@ def main(argv=None) -> int:
     ap.add_argument("--start", default="2021-01-10")
     ap.add_argument("--case", nargs="*", help="cases to make (default: all)")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
-    ap.add_argument("--house", choices=("house1", "house2"), default="house1",
+    ap.add_argument("--house", choices=("house1", "house2", "house3"), default="house1",
                     help="which rig (default: house1)")
     a = ap.parse_args(argv)
     cases, make = CASES, make_case
-    if a.house == "house2":
-        from .house2 import suite as _h2
-        cases, make = _h2.CASES, _h2.make_case
+    if a.house in ("house2", "house3"):
+        import importlib
+        hs = importlib.import_module(f".{a.house}.suite", __package__)
+        cases, make = hs.CASES, hs.make_case
     if a.list:
         for name, c in cases.items():
             print(f"{name:20s} {', '.join(c['expected']):36s} {c['description']}")

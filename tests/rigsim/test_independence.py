@@ -13,9 +13,11 @@ ROOT = PKG_DIR.parent
 
 def test_rigsim_imports_nothing_of_the_project():
     assert PKG_DIR.name == "rigsim" and len(list(PKG_DIR.rglob("*.py"))) >= 6
-    # the house-2 subpackage is scanned too (violations() walks rigsim/ recursively)
+    # the house-2 and house-3 subpackages are scanned too (violations() walks rigsim/ recursively)
     scanned = {p.relative_to(PKG_DIR).as_posix() for p in PKG_DIR.rglob("*.py")}
     assert {"house2/core.py", "house2/model.py", "house2/daq.py", "house2/suite.py"} <= scanned
+    assert {f"house3/{m}.py" for m in ("layout", "plc", "units", "core", "model", "daq",
+                                       "suite")} <= scanned
     project = project_packages(ROOT, "rigsim")
     assert {"plant", "gateway", "devices", "profiles", "phil", "labsim", "cli"} <= project
     bad = violations(PKG_DIR, project)

@@ -8,6 +8,8 @@ import pytest
 from rigsim import model, suite
 from rigsim.house2 import model as model2
 from rigsim.house2 import suite as suite2
+from rigsim.house3 import model as model3
+from rigsim.house3 import suite as suite3
 from rigsim.daq import NAMES
 from rigsim.tables import channel_list
 
@@ -73,10 +75,11 @@ def test_case_files_and_contract(case_dir):
     assert "rigsim.suite" in m["command"]
 
 
-@pytest.mark.parametrize("m, s, case", [(model, suite, "null_a"), (model2, suite2, "heat_loss_30")],
-                         ids=["house1", "house2"])
+@pytest.mark.parametrize("m, s, case", [(model, suite, "null_a"), (model2, suite2, "heat_loss_30"),
+                                        (model3, suite3, "ground_collector_degradation_700")],
+                         ids=["house1", "house2", "house3"])
 def test_realisations_differ_and_reproduce(tmp_path, m, s, case):
-    """Both houses' suites: a realisation reproduces its nuisance and recording, another differs."""
+    """Every house's suite: a realisation reproduces its nuisance and recording, another differs."""
     a, b = m.draw_nuisance(0), m.draw_nuisance(1)
     assert a != b and m.draw_nuisance(1) == b
     m1 = s.make_case(case, tmp_path / "x", days=0.1, realisation=3)
