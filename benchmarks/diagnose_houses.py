@@ -1,14 +1,14 @@
 """The diagnosis on houses other than house 1: the public suites of the clean-room rig simulator
 (rigsim) per house, each case diagnosed with that house's file.
 
-    python benchmarks/diagnose_houses.py [--house house2] [--cases null_a heat_loss_30 ...]
+    python benchmarks/diagnose_houses.py [--house house2 house3] [--cases null_a heat_loss_30 ...]
                                          [--days 7] [--realisation 0] [--jobs 2] [--keep DIR]
 
 Prints per case the expected and reported verdict, the named effect's size against the truth
 where the case has one, the seconds; then per house `RESULT <house>_correct=k/n` and
 `RESULT <house>_seconds_per_case=...` beside the same figures of the whole suite's simulation
-(the comparison measured in the same run: what the recordings cost to make). House 3 has no
-rig simulator yet: it is named and skipped.
+(the comparison measured in the same run: what the recordings cost to make). Houses 2 and 3
+(rigsim/house2, rigsim/house3); a house in NOT_YET would be named and skipped.
 """
 from __future__ import annotations
 
@@ -20,8 +20,9 @@ from pathlib import Path
 
 from plant.diagnose import diagnose, recording_io
 
-SUITES = {"house2": "rigsim.house2.suite"}   # house -> the rig simulator's suite module
-NOT_YET = {"house3": "no clean-room rig simulator of house 3 yet (docs/lab/house3-rig.md is its description)"}
+SUITES = {"house2": "rigsim.house2.suite",    # house -> the rig simulator's suite module
+          "house3": "rigsim.house3.suite"}
+NOT_YET: dict[str, str] = {}   # house -> why it has no rig simulator yet (named and skipped)
 # named effect -> (its estimate from report.json, the truth's key in meta.json sizes)
 SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_UA_W_per_K"),
          "sensor_offset": (lambda r: r["parameters"]["offset"]["value"], "offset_K"),
