@@ -30,7 +30,9 @@ SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_U
          "heat_pump_capacity": (lambda r: r["parameters"]["factor"]["value"], "capacity_factor"),
          "defrost_share": (lambda r: r["parameters"]["share"]["value"], "defrost_share"),
          "collector_degradation": (lambda r: r["parameters"]["factor"]["value"], "eta0_factor"),
-         "slab_capacity": (lambda r: r["parameters"]["factor"]["value"], "factor")}
+         "slab_capacity": (lambda r: r["parameters"]["factor"]["value"], "factor"),
+         "coil_fouling": (lambda r: r["parameters"]["factor"]["value"], "factor"),
+         "ground_collector_degradation": (lambda r: r["size"]["UA_W_per_K"], "UA_W_per_K")}
 
 
 def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:

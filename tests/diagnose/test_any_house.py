@@ -44,3 +44,28 @@ def test_a_house_file_written_for_the_test_is_diagnosed_on_its_own_recording(tmp
     assert rep["locate"]["replay"]["plant"] == "small_boiler_cut_circuit"
     assert rep["verdict"] == "no_missing_physics", (rep["verdict"], rep["locate"]["mismatched_signals"])
     assert np.isfinite(rep["energy"]["boiler"]["error_before_pct"])
+
+
+def test_a_heat_pump_that_lost_capacity_is_named_and_sized_on_house2(tmp_path):
+    """The twin's own day of house 2 with the heat pump's heat and COP x 0.7 at the same pump
+    flow (a line of a house file): the candidate bound to the heat-pump kind names it within 10 %,
+    against its COP and defrost look-alikes and the storage loss."""
+    from plant.diagnose.effects import catalogue
+
+    f = 0.7
+    ov = {"heat_pump.P_heat_nom": f * 5750.0, "heat_pump.COP_nom": f * 4.65, "heat_pump.dT": f * 5.0}
+    house = load_house("house2", start="2021-01-12", overrides=ov)
+    t, rows = house.run(86400.0, dt=1.0, out_interval=60.0)
+    roles = roles_of("house2")
+    keep = list(roles.commands) + ["heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow", "heat_pump.Q_flow",
+                                   "heat_pump.P_el", "mixer.m_flow", "mixer.T_sup", "mixer.T_ret", "dhw.m_flow_hot"]
+    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
+    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
+    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house="house2")
+    rec = recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house="house2")
+    ids = ("heat_pump_capacity", "heat_pump_cop", "defrost_share", "heat_loss")
+    rep = diagnose(rec, house="house2", log=lambda *a: None, plots=False, jobs=1,
+                   effects=[e for e in catalogue("house2") if e.id in ids])
+    assert rep["effect"] == "heat_pump_capacity" and rep["component"] == "heat_pump", (rep["verdict"], rep["effect"])
+    assert abs(rep["parameters"]["factor"]["value"] / f - 1.0) < 0.10, rep["parameters"]
+    assert rep["affected_heldout_rmse_after"] <= 0.5 * rep["affected_heldout_rmse_before"]

@@ -1,5 +1,5 @@
 """Candidates on units of any house, bound to their kinds (UnitEffect): a heat pump's capacity,
-COP and defrost share, a solar collector's optics, a floor's slab. Each is a factor on a
+COP and defrost share, a solar collector's optics and coil, a floor's slab, a ground collector. Each is a factor on a
 parameter the kind already carries, so it is a line of a house file too (`P_heat_nom = ...`)."""
 from __future__ import annotations
 
@@ -117,13 +117,28 @@ class SlabCapacity(_Factor):
 
 
 @register
-class BrineSide(_Factor):
+class GroundCollectorDegradation(_Factor):
     """A ground collector that gives less heat to its brine (air in the loop, a collector laid
     too shallow or in dry soil): the brine-to-ground conductance x factor, so the brine, and with
     it the unit's source and COP, run colder."""
-    id = "brine_side"
+    id = "ground_collector_degradation"
     KINDS = ("ground_collector",)
     LOCALS = ("UA",)
     WHAT = "brine-to-ground conductance"
     params = (Param("factor", 0.1, 1.0, 1.0, "1", log=True),)
     description = "ground collector's brine-to-ground conductance reduced (ground collector UA x factor)"
+
+    def size(self, theta, ctx, sim=None):
+        return {"factor": float(theta[0]), "UA_W_per_K": float(theta[0]) * self._file["UA"]}
+
+
+@register
+class CoilFouling(_Factor):
+    """A solar coil that passes less heat to the tank (scale, sludge): the coil's transfer x factor,
+    so the loop returns warmer and the collector runs hotter for the same heat."""
+    id = "coil_fouling"
+    KINDS = ("solar_collector",)
+    LOCALS = ("UA",)
+    WHAT = "solar coil heat transfer"
+    params = (Param("factor", 0.1, 1.0, 1.0, "1", log=True),)
+    description = "solar coil fouled (the collector's coil UA x factor)"
