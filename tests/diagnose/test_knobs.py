@@ -97,3 +97,14 @@ def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_run
     assert r.unfollowed({"solar.on": runs}) == {}
     assert r.unfollowed({"solar.on": two}) == {}
     assert r.unfollowed({}) == {}
+
+
+def test_the_storage_plume_candidate_stays_within_half_of_each_houses_tank():
+    from types import SimpleNamespace
+
+    from plant.diagnose.effects import catalogue
+
+    for house, hi in (("house1", 0.4), ("house2", 0.3925)):
+        e = next(e for e in catalogue(house) if e.id == "storage_mixing")
+        assert e.plausible(SimpleNamespace(roles=roles_of(house))) == (True, "")
+        assert e.params[0].hi == pytest.approx(hi)

@@ -53,6 +53,13 @@ class StorageMixing(Effect):
     def overrides(self, theta):
         return {"switch.storage_inlet_mixing": float(theta[0])}
 
+    def plausible(self, ctx):
+        # up to half the tank, as the coupling point allows (house 1's 0.8 m3: the 0.4 above)
+        if ctx.roles.buffer and 0.5 * ctx.roles.buffer[1] < self.params[0].hi:
+            p = self.params[0]
+            self.params = (Param(p.name, p.lo, 0.5 * ctx.roles.buffer[1], p.nominal, p.unit),)
+        return True, ""
+
     def summary(self, theta, ctx, sim=None):
         return f"each storage inflow spreads over {theta[0] * 1000:.0f} l beyond its port layer (nominal 0)"
 
