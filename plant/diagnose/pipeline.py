@@ -149,9 +149,9 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
             results.append(fit.Result(e.id, e.component, e.kind, False,
                                       f"{rp.house_name} has no {e.component}", effect=e))
             continue
-        # a unit's own candidate on a unit the cut replaced (house 1's station and radiators
-        # have their own replay alone, _alone)
-        if isinstance(e, UnitEffect) and e.component in rp.removed:
+        # a unit's own candidate on a unit the cut replaced (unless replayed alone: house 1's
+        # station and radiators, cut._alone)
+        if isinstance(e, UnitEffect) and e.at in rp.removed - rp.alone_instances:
             results.append(fit.Result(e.id, e.component, e.kind, False, f"the replay's cut puts measurements where "
                                       f"{e.component} was ({rp.plant_label})", effect=e))
             continue

@@ -98,6 +98,8 @@ class Replayer:
         self.radiator = cut_mod.radiator_alone(rec, self.cut)
         removed = set(self.cut.removes) if self.cut else set()
         self.removed = removed
+        # the instances the cut removed that are replayed alone between their measured interfaces
+        self.alone_instances = ({"mixer"} if self.circuit else set()) | ({"radiator"} if self.radiator else set())
         # what the replay loads (a derived cut's file) and what the report calls it
         self.plant_name = str(self.cut.path()) if self.cut else house
         self.plant_label = self.cut.label if self.cut else str(house)

@@ -33,7 +33,7 @@ def test_house2_knobs_are_named_for_its_own_instances_and_links():
     # one storage loss although two coupling points feed the storage; each point's headers
     assert keys.count("storage.UA_loss") == 1
     assert {"floor.Q_nominal", "zone.H_direct", "switch.storage_inlet_mixing", "heating.storage_inlet_mixing",
-            "supply_header.V", "heating_supply.V", "heat_pump.dT"} <= set(keys)
+            "supply_header.V", "heating_supply.V", "heat_pump.dT", "heat_pump.P_heat_nom"} <= set(keys)
     hp = next(q for q in calibration.knobs("house2") if q.key == "heat_pump.dT")
     assert hp.signals == ("heat_pump.m_flow",) and not hp.joint
     header = next(q for q in calibration.knobs("house2") if q.key == "heating_supply.V")
@@ -75,12 +75,31 @@ def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
     units = lambda house: {(e.id, e.component) for e in catalogue(house) if getattr(e, "KINDS", ())}  # noqa: E731
     assert units("house2") == {("heat_pump_capacity", "heat_pump"), ("heat_pump_cop", "heat_pump"),
                                ("defrost_share", "heat_pump"), ("collector_degradation", "solar"),
-                               ("coil_fouling", "solar"), ("slab_capacity", "floor")}
-    # a ground-source unit has no defrost; house 1 has none of these kinds
+                               ("coil_fouling", "solar"), ("slab_capacity", "floor"), ("valve_leakage", "mixer"),
+                               ("heat_loss", "storage"), ("pipe_heat_loss", "supply_header"),
+                               ("storage_mixing", "storage")}
+    # a ground-source unit has no defrost
     assert ("defrost_share", "heat_pump") not in units("house3") and ("heat_pump_cop", "heat_pump") in units("house3")
     assert {("ground_collector_degradation", "ground"), ("coil_fouling", "solar")} <= units("house3")
-    assert units("house1") == set()
-    assert {e.id for e in catalogue()} == {e.id for e in catalogue("house1")}
+    # house 1's catalogue is the one written for its instances before the candidates were bound
+    # to kinds, in its order (the overrides are checked by the identity of its reports)
+    assert [(e.id, e.component) for e in catalogue("house1")] == [
+        ("idle_generator_flow", "chp"), ("pump_coupling", "chp"), ("valve_leakage", "mixer"), ("sensor_lag", "sensor"),
+        ("sensor_offset", "sensor"), ("transport_delay", "sensor"), ("heat_loss", "storage"),
+        ("pipe_heat_loss", "supply_header"), ("storage_mixing", "storage"), ("thermal_mass", "chp")]
+    assert [e.id for e in catalogue()] == [e.id for e in catalogue("house1")]
+
+
+def test_a_storage_loss_candidate_starts_at_the_houses_own_file_value():
+    from types import SimpleNamespace
+
+    from plant.diagnose.effects import catalogue
+
+    for house, ua in (("house1", 20.0), ("house2", 7.0)):
+        e = next(e for e in catalogue(house) if e.id == "heat_loss")
+        e.plausible(SimpleNamespace(roles=roles_of(house)))
+        assert (e.params[0].lo, e.params[0].nominal, e.params[0].hi) == pytest.approx((ua, ua, 20 * ua))
+        assert e.overrides([2 * ua]) == {"storage.UA_loss": 2 * ua}
 
 
 def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_runs_is_not():

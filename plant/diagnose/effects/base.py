@@ -91,21 +91,30 @@ class Effect:
 
 class UnitEffect(Effect):
     """A candidate on every instance of the kinds it names (KINDS), whatever the house calls it:
-    `catalogue(house)` makes one per such instance, with `component` set to its name; its
-    overrides name the instance's own parameters through `key`."""
+    `catalogue(house)` makes one per instance `bound` gives, with `component` (what the report
+    names) and `at` (the instance whose parameters its overrides set, through `key`)."""
     KINDS: tuple = ()
 
-    def __init__(self, component: str = ""):
+    def __init__(self, component: str = "", at: str | None = None, pair: str | None = None):
         self.component = component
+        self.at = at or component
+        self.pair = pair            # an instance taking the same value (a return header)
+
+    @classmethod
+    def bound(cls, spec, roles) -> list:
+        """(component, at[, pair]) for each instance of the house the candidate is made for."""
+        return [(i.name, i.name) for i in spec.instances.values() if i.kind in cls.KINDS]
 
     def key(self, local: str) -> str:
-        return f"{self.component}.{local}"
+        return f"{self.at}.{local}"
 
     def nominal(self, ctx, local: str) -> float:
-        """The instance's value of its parameter `local` in the replayed house file."""
+        """The instance's value of its parameter or option `local` in the replayed house file."""
         from ...declaration import load
 
-        return float(getattr(load(ctx.roles.house).instances[self.component].params, local))
+        inst = load(ctx.roles.house).instances[self.at]
+        v = getattr(inst.params, local) if hasattr(inst.params, local) else inst.options.get(local)
+        return float(v or 0.0)
 
 
 REGISTRY: dict[str, type] = {}
@@ -118,16 +127,17 @@ def register(cls):
     return cls
 
 
-def catalogue(house=None) -> list[Effect]:
+def catalogue(house="house1") -> list[Effect]:
     """Every registered candidate; those bound to kinds (UnitEffect) once per instance of them in
-    `house` (none without a house)."""
+    `house` (UnitEffect.bound)."""
     from ...declaration import load
+    from ..roles import of
 
-    units = [i for i in load(house).instances.values()] if house is not None else []
+    spec, roles = load(house), of(house)
     out = []
     for cls in REGISTRY.values():
         if issubclass(cls, UnitEffect):
-            out += [cls(i.name) for i in units if i.kind in cls.KINDS]
+            out += [cls(*names) for names in cls.bound(spec, roles)]
         else:
             out.append(cls())
     return out

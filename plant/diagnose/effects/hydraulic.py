@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ...components.generator import Mode
-from .base import Effect, Param, register
+from .base import Effect, Param, UnitEffect, register
 
 
 @register
@@ -134,27 +134,27 @@ class PumpCoupling(Effect):
 
 
 @register
-class ValveLeakage(Effect):
+class ValveLeakage(UnitEffect):
     """Seat leakage of the heating circuit's mixing valve (mixer.leak): a closed valve still lets
     a share of the circuit flow in from the supply header. The controller hides a leak while the
     valve is open, so it is tested only when the replayed valve stands (nearly) closed with the
     pump running for a noticeable share of the recording."""
     id = "valve_leakage"
-    component = "mixer"
+    KINDS = ("mixing_station",)
     kind = "simulate"
     params = (Param("leak", 0.0, 0.3, 0.0, "1 (primary share through the closed mixing valve)"),)
     description = ("the closed mixing valve leaks: part of the heating circuit's flow still comes "
                    "from the supply header (mixer.leak)")
 
     def overrides(self, theta):
-        return {"mixer.leak": float(theta[0])}
+        return {self.key("leak"): float(theta[0])}
 
     def plausible(self, ctx):
         if ctx.nominal is None:
             return True, ""
         rows = ctx.nominal.rows
         on = ctx.mode_mask("heating_on")[: len(rows)]
-        closed = on & (rows[:, ctx.index("mixer.y_valve")] < 0.05)
+        closed = on & (rows[:, ctx.index(self.key("y_valve"))] < 0.05)
         if closed.sum() < 0.02 * len(rows):
             return False, ("the replayed mixing valve is (almost) never closed while the pump runs, "
                            "so a seat leak cannot show")
