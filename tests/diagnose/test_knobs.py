@@ -127,3 +127,18 @@ def test_the_storage_plume_candidate_stays_within_half_of_each_houses_tank():
         e = next(e for e in catalogue(house) if e.id == "storage_mixing")
         assert e.plausible(SimpleNamespace(roles=roles_of(house))) == (True, "")
         assert e.params[0].hi == pytest.approx(hi)
+
+
+def test_a_user_candidate_bound_to_a_kind_the_project_lacks_is_refused_with_the_closest_kinds():
+    from plant.diagnose.effects import Param, UnitEffect, register
+    from plant.diagnose.effects.base import REGISTRY
+    from plant.errors import ConfigError
+
+    class Typo(UnitEffect):
+        id = "my_heat_pump_effect"
+        KINDS = ("heat_pump_ari",)
+        params = (Param("factor", 0.5, 1.0, 1.0, "1"),)
+
+    with pytest.raises(ConfigError, match=r"KINDS names 'heat_pump_ari', which is no kind .*did you mean heat_pump_air"):
+        register(Typo)
+    assert "my_heat_pump_effect" not in REGISTRY

@@ -123,6 +123,14 @@ REGISTRY: dict[str, type] = {}
 def register(cls):
     if not getattr(cls, "id", ""):
         raise ValueError(f"{cls.__name__}: an effect needs an id")
+    if issubclass(cls, UnitEffect):
+        from ...errors import ConfigError, did_you_mean
+        from ...kinds import KINDS
+
+        for k in cls.KINDS:
+            if k not in KINDS:
+                raise ConfigError(f"effect {cls.id!r} ({cls.__name__}): KINDS names {k!r}, which is no kind of "
+                                  f"the project; " + did_you_mean(k, list(KINDS), "the kinds: " + ", ".join(sorted(KINDS))))
     REGISTRY[cls.id] = cls
     return cls
 
