@@ -3,6 +3,10 @@
 
     python benchmarks/diagnose_houses.py [--house house2 house3] [--cases null_a heat_loss_30 ...]
                                          [--days 7] [--realisation 0] [--jobs 2] [--keep DIR]
+    python benchmarks/diagnose_houses.py --score DIR     # score the reports a --keep run left
+
+A case is right when its verdict or named effect is one it expects and, for a sensor effect, the
+sensor named is the one its channel maps to.
 
 Prints per case the expected and reported verdict, the named effect's size against the truth
 where the case has one, the seconds; then per house `RESULT <house>_correct=k/n` and
@@ -15,7 +19,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import tempfile
+import json
 import time
+import tomllib
 from pathlib import Path
 
 from plant.diagnose import diagnose, recording_io
@@ -35,6 +41,19 @@ SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_U
          "ground_collector_degradation": (lambda r: r["size"]["UA_W_per_K"], "UA_W_per_K")}
 
 
+def right(rep: dict, meta: dict, d: Path) -> bool:
+    """The verdict or named effect is one the case expects, and a sensor effect is named on the
+    sensor the case's channel (meta sizes "tag") maps to in its columns file."""
+    got = rep["effect"] or rep["verdict"]
+    if got not in meta["expected"]:
+        return False
+    tag = meta.get("sizes", {}).get("tag")
+    if got.startswith("sensor_") and tag:
+        columns = tomllib.loads((d / "columns.toml").read_text())["columns"]
+        return rep.get("component") == columns[tag]["signal"]
+    return True
+
+
 def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:
     suite = importlib.import_module(SUITES[house])
     cases = a.cases or list(suite.CASES)
@@ -50,7 +69,7 @@ def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:
                        out=(d / "report") if a.keep else None)
         walls.append(time.perf_counter() - t0)
         got = rep["effect"] or rep["verdict"]
-        ok = got in meta["expected"]
+        ok = right(rep, meta, d)
         right += ok
         size = ""
         if ok and got in SIZES and SIZES[got][1] in meta["sizes"]:
@@ -70,7 +89,15 @@ def main() -> None:
     p.add_argument("--realisation", type=int, default=0)
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--keep", type=Path, help="keep the recordings and reports in this directory")
+    p.add_argument("--score", type=Path, help="score the reports an earlier --keep run left in this directory")
     a = p.parse_args()
+    if a.score:
+        for house in a.house:
+            cases = sorted(d for d in (a.score / house).glob("*") if (d / "report" / "report.json").exists())
+            k = sum(right(json.loads((d / "report" / "report.json").read_text()), json.loads((d / "meta.json").read_text()), d)
+                    for d in cases)
+            print(f"RESULT {house}_correct={k}/{len(cases)}")
+        return
     with tempfile.TemporaryDirectory() as tmp:
         root = a.keep or Path(tmp)
         results = {}
