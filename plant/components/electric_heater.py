@@ -73,6 +73,8 @@ STATES = ("thermostat", "E_el")
 PAR = indices(Params)
 X = indices(STATES)
 C_LAYER = len(PAR)  # appended by the kind after the packed Params: heat capacity of its layer [J/K]
+LAYER = C_LAYER + 1  # ... and then the layer the rod is in (a parameter, not a constant of the
+# generated step: a storage re-layered by a diagnosis's scheme is the same compiled plant)
 
 
 def initial_state(params) -> np.ndarray:
@@ -120,15 +122,16 @@ class Kind(ComponentKind):
         layer = c.port_layer(inst, "height", st.name)
         C = RHO * st.params.volume / st.params.n_layers * CP
         x = c.state(inst, self.initial_state(inst))
-        p = c.param(inst, np.append(pack(inst.params), C))
+        p = c.param(inst, np.append(pack(inst.params), [C, float(layer)]))
         on = c.signal(inst, "on", "1", "input", "relay: 1 = released (SG-ready), 0 = blocked")
         P_set = c.signal(inst, "P_set", "W", "input", "power limit when released (PV-surplus mode); "
                                                       "P_nom unless driven from outside")
         c.write_command("control", f"{inst.name}.P_set", f"{p}[{PAR.P_nom}]")
         mod = c.module(__name__)
         P, T = c.var("P_rod"), c.state_of(inst, st)  # the storage's layer temperatures
-        c.emit("hydraulics", f"{P} = {mod}.power({x}, {p}, {on}, {P_set}, {T}[{layer}])")
-        c.emit("storages", f"{T}[{layer}] += {P} * h / {p}[{C_LAYER}]")
+        k = f"int({p}[{LAYER}])"
+        c.emit("hydraulics", f"{P} = {mod}.power({x}, {p}, {on}, {P_set}, {T}[{k}])")
+        c.emit("storages", f"{T}[{k}] += {P} * h / {p}[{C_LAYER}]")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{x}[{X.E_el}] -= {P} * h",
