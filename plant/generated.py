@@ -63,7 +63,9 @@ def drive(times, cmd, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, out):
         a, b, rec = seg[0], seg[1], int(seg[3])
         if b > a:
             n = n_steps(b - a)
-            run(n, (b - a) / n, a, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, no_out, 0)
+            # rec_every an int64, not the literal 0: numba would compile run a second time for
+            # Literal[int](0) beside the int64 run House.reset compiles (#27)
+            run(n, (b - a) / n, a, x, p, s, remote, ledger, tabs, prof, ia, fa, bind, no_out, np.int64(0))
         else:
             apply_bindings(a, 0.0, bind, s)
         if rec >= 0:
