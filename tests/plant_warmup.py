@@ -9,6 +9,12 @@ federates or a `twin` subprocess compiling on a loaded machine can overrun. Here
 compiled once, in a pool of processes, while the workers collect the tests
 (tests/conftest.py: whole-suite runs with workers only); a house already in the cache costs a
 load of ~1 s.
+
+After the shipped houses, the same pool compiles the house-1 variants every diagnosis of a house-1
+recording replays (DIAGNOSIS_VARIANTS: the derived circuit cut with the twin's or the lab's sensor
+heights, each with and without the re-fit's port mixing, and the whole house with it), with the
+replay's `drive`: a dozen diagnosis tests need them, and both workers would otherwise compile the
+same ones side by side when the diagnosis files start.
 """
 from __future__ import annotations
 
@@ -40,6 +46,46 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
     return Path(path).name, time.monotonic() - t, None
 
 
+# (label, house: "house1" or "cut" (its derived circuit cut, plant/diagnose/derive.py), overrides that
+# change the generated plant): what a diagnosis of a house-1 recording loads besides the file's
+# plant. Heights and the mixing volume are parameters of the step (any values give the same plant);
+# given at all they compile another: sensors read at heights (a columns file's), and an inflow
+# spread beyond its port layer (calibration.NOMINAL_REFIT's switch.storage_inlet_mixing).
+_LAB = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)],
+        "dhw_storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
+_MIXING = {"switch.storage_inlet_mixing": 0.025}
+DIAGNOSIS_VARIANTS = (
+    ("house1 (driven)", "house1", {}),
+    ("house1 + port mixing", "house1", _MIXING),
+    ("house1 cut", "cut", {}),
+    ("house1 cut + port mixing", "cut", _MIXING),
+    ("house1 cut at the lab's sensors", "cut", _LAB),
+    ("house1 cut at the lab's sensors + port mixing", "cut", {**_LAB, **_MIXING}),
+)
+
+
+def compile_variant(label: str, house: str, overrides: dict) -> tuple[str, float, str | None]:
+    """Load one variant as a replay does (external controller) and drive it for two samples, so
+    that its step, run and drive are compiled (or found in the cache): (label, seconds, error)."""
+    t = time.monotonic()
+    try:
+        import numpy as np
+
+        from plant.house import load_house
+
+        path = house
+        if house == "cut":
+            from plant.diagnose.derive import derive
+
+            path = str(derive("house1", "circuit").path())
+        h = load_house(path, start="2021-01-10", controller="external", overrides=overrides or None)
+        h.drive(np.array([0.0, 60.0]), [], np.zeros((2, 0)))
+        h.close()
+    except Exception as e:  # noqa: BLE001 - a broken variant fails its own tests, not the warm-up
+        return label, time.monotonic() - t, f"{type(e).__name__}: {e}"
+    return label, time.monotonic() - t, None
+
+
 class Warmup:
     """Compile the shipped houses in `jobs` fresh processes; wait() for the result."""
 
@@ -47,12 +93,14 @@ class Warmup:
         self.t0 = time.monotonic()
         self.pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
         self.futures: list[Future] = [self.pool.submit(compile_house, str(p)) for p in house_files()]
+        self.variants: list[Future] = [self.pool.submit(compile_variant, *v) for v in DIAGNOSIS_VARIANTS]
         self.jobs = jobs
 
     def wait(self) -> str:
         """Block until every house is compiled; one line saying what it took."""
         try:
             results = [f.result() for f in self.futures]
+            variants = [f.result() for f in self.variants]
         except Exception as e:  # noqa: BLE001 - a lost process: the tests compile what is missing
             self.pool.shutdown(cancel_futures=True)
             return f"plant warm-up stopped ({type(e).__name__}: {e}); the tests compile what is missing"
@@ -62,4 +110,6 @@ class Warmup:
         line = (f"plant warm-up: {len(results)} shipped houses compiled or found in the plant cache in "
                 f"{time.monotonic() - self.t0:.0f} s by {self.jobs} processes (slowest {slowest[0]} "
                 f"{slowest[1]:.0f} s)")
+        failed += [f"{name} ({error.splitlines()[0][:120]})" for name, _, error in variants if error]
+        line += f", and {len(variants)} house-1 variants a diagnosis replays"
         return line + (f"; failed, left to their tests: {', '.join(failed)}" if failed else "")
