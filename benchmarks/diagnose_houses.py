@@ -33,11 +33,11 @@ NOT_YET: dict[str, str] = {}   # house -> why it has no rig simulator yet (named
 SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_UA_W_per_K"),
          "sensor_offset": (lambda r: r["parameters"]["offset"]["value"], "offset_K"),
          "sensor_lag": (lambda r: r["parameters"]["tau"]["value"], "tau_s"),
-         "heat_pump_capacity": (lambda r: r["parameters"]["factor"]["value"], "capacity_factor"),
+         "heat_pump_capacity": (lambda r: r["size"]["factor_of_file"], "capacity_factor"),
          "defrost_share": (lambda r: r["parameters"]["share"]["value"], "defrost_share"),
-         "collector_degradation": (lambda r: r["parameters"]["factor"]["value"], "eta0_factor"),
-         "slab_capacity": (lambda r: r["parameters"]["factor"]["value"], "factor"),
-         "coil_fouling": (lambda r: r["parameters"]["factor"]["value"], "factor"),
+         "collector_degradation": (lambda r: r["size"]["factor_of_file"], "eta0_factor"),
+         "slab_capacity": (lambda r: r["size"]["factor_of_file"], "factor"),
+         "coil_fouling": (lambda r: r["size"]["factor_of_file"], "factor"),
          "ground_collector_degradation": (lambda r: r["size"]["UA_W_per_K"], "UA_W_per_K")}
 
 

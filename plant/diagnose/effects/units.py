@@ -18,15 +18,23 @@ class _Factor(UnitEffect):
         return {self.key(k): float(theta[0]) * self._file[k] for k in self.LOCALS}
 
     def plausible(self, ctx):
-        # a factor on the calibrated twin's value (the nominal re-fit's, else the file's)
-        self._file = {k: ctx.calibration.get(self.key(k), self.nominal(ctx, k)) for k in self.LOCALS}
+        # a factor on the calibrated twin's value (the nominal re-fit's, else the file's); its
+        # size is said against the file too (the re-fit may have taken part of it within its
+        # tolerance: a heat pump's heat output +-10 %)
+        self._raw = {k: self.nominal(ctx, k) for k in self.LOCALS}
+        self._file = {k: ctx.calibration.get(self.key(k), self._raw[k]) for k in self.LOCALS}
         return True, ""
 
+    def _of_file(self, theta) -> float:
+        k = self.LOCALS[0]
+        return float(theta[0]) * self._file[k] / self._raw[k] if self._raw[k] else float(theta[0])
+
     def summary(self, theta, ctx, sim=None):
-        return f"{self.component}: {self.WHAT} x {theta[0]:.3g} (nominal 1)"
+        return (f"{self.component}: {self.WHAT} x {theta[0]:.3g} of the calibrated twin, x {self._of_file(theta):.3g} "
+                "of the house file")
 
     def size(self, theta, ctx, sim=None):
-        return {"factor": float(theta[0])}
+        return {"factor": float(theta[0]), "factor_of_file": self._of_file(theta)}
 
 
 class _Running(_Factor):
@@ -129,7 +137,7 @@ class GroundCollectorDegradation(_Factor):
     description = "ground collector's brine-to-ground conductance reduced (ground collector UA x factor)"
 
     def size(self, theta, ctx, sim=None):
-        return {"factor": float(theta[0]), "UA_W_per_K": float(theta[0]) * self._file["UA"]}
+        return {**super().size(theta, ctx, sim), "UA_W_per_K": float(theta[0]) * self._file["UA"]}
 
 
 @register
