@@ -224,8 +224,7 @@ class Replayer:
         station's when it is replayed alone."""
         from ..declaration import load
 
-        out = set(load(self.plant_name).instances)
-        return out | ({"mixer"} if self.circuit else set()) | ({"radiator"} if self.radiator else set())
+        return set(load(self.plant_name).instances) | self.alone_instances
 
     def _init_storage(self, house) -> None:
         for comp in ("storage", "dhw_storage"):

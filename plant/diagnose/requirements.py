@@ -33,6 +33,9 @@ def check_house(house) -> None:
                           "plant is an FMU ([house] topology = \"fmu\"): diagnose the native house it was exported from")
 
 
+OWN = "commands of a unit's own control (optional; replayed where recorded, else the twin's control decides)"
+
+
 def requirements(house="house1") -> dict:
     """What a recording of `house` must hold, for any house file: its commands, the measured
     signals per subsystem, and per cut what it must measure to be replayed there."""
@@ -43,8 +46,7 @@ def requirements(house="house1") -> dict:
     out = {
         "commands (required; replayed into the twin)": list(roles.commands),
         "accepted substitutes (with a warning)": {k: f"or {v}" for k, v in roles.substitutes.items()},
-        "commands of a unit's own control (optional; replayed where recorded, else the twin's control decides)":
-            list(roles.own_commands),
+        OWN: list(roles.own_commands),
         "boundary conditions (optional; taken from the twin's profiles by date, checked if present)":
             [b for b in BOUNDARY if b in roles.catalogue],
         "start date (required in [recording] start of the mapping, meta.json, or --start)": ["start"],
@@ -54,7 +56,9 @@ def requirements(house="house1") -> dict:
         "measured boundaries (optional; what each signal enables)": [
             f"{sig} -> {what}" for sig, what in cut_mod.requirements(house).items()],
     }
-    return {k: v for k, v in out.items() if v or k.startswith("commands (")}
+    if not out[OWN]:
+        del out[OWN]     # a house whose kinds have none: no empty heading
+    return out
 
 
 def lines(req: dict) -> list[str]:

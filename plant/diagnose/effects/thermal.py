@@ -17,7 +17,6 @@ class _FromFile(UnitEffect):
     kind = "simulate"
     LOCAL = ""
     RANGE = 20.0
-    WORDS = ""
 
     def plausible(self, ctx):
         v = self.nominal(ctx, self.LOCAL)
