@@ -128,13 +128,15 @@ def test_a_bench_on_another_map_or_none_is_refused_naming_the_fix(tmp_path):
 @pytest.mark.realtime
 def test_sf3_closed_loop_over_canopen_brine_heat_agrees_with_the_ground_collector(tmp_path):
     """As tests/phil/test_brine.py's Modbus loop (house 3, type day 1 from midnight, one duty
-    cycle of the lab's heat pump at 200x), the brine bench a CANopen node on a virtual bus in
-    this process: the same heat agreement, 0.6 %."""
+    cycle of the lab's heat pump), the brine bench a CANopen node on a virtual bus in this
+    process: the same heat agreement, 0.6 %. At 100x, not the Modbus loop's 200x: in two of three
+    full-suite runs (fresh clones, nothing beside it) the loop at 200x gave 1.73 % while it gave
+    0.004 % alone; the bench and the twin share this one process here."""
     bus = "virtual:phil-canopen-sf3"
-    server = BenchServer("brine", speed=200.0, can=bus).start()
+    server = BenchServer("brine", speed=100.0, can=bus).start()
     try:
         loop = PhilLoop("SF3", {"brine": parse_bench(f"brine=canopen:{bus}")[1]},
-                        PhilOptions(speed=200.0, dt=2.0, hours=0.5, typeday=1, warmup_s=300.0,
+                        PhilOptions(speed=100.0, dt=2.0, hours=0.5, typeday=1, warmup_s=300.0,
                                     record=tmp_path / "run"))
         report = loop.run()
         time.sleep(0.05)
