@@ -57,7 +57,7 @@ def right(rep: dict, meta: dict, d: Path) -> bool:
 def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:
     suite = importlib.import_module(SUITES[house])
     cases = a.cases or list(suite.CASES)
-    right, walls, sims = 0, [], []
+    n_right, walls, sims = 0, [], []
     for case in cases:
         t0 = time.perf_counter()
         meta = suite.make_case(case, root / house, days=a.days, realisation=a.realisation)
@@ -70,7 +70,7 @@ def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:
         walls.append(time.perf_counter() - t0)
         got = rep["effect"] or rep["verdict"]
         ok = right(rep, meta, d)
-        right += ok
+        n_right += ok
         size = ""
         if ok and got in SIZES and SIZES[got][1] in meta["sizes"]:
             est, truth = SIZES[got][0](rep), meta["sizes"][SIZES[got][1]]
@@ -78,7 +78,7 @@ def run_house(house: str, a, root: Path) -> tuple[int, int, float, float]:
         print(f"{house} {case:<26} expected {'|'.join(meta['expected']):<36} -> {got:<22} "
               f"({rep['verdict']}, component {rep.get('component')}){size}  {'OK' if ok else 'WRONG'}  "
               f"{walls[-1]:.0f} s", flush=True)
-    return right, len(cases), sum(walls) / len(walls), sum(sims) / len(sims)
+    return n_right, len(cases), sum(walls) / len(walls), sum(sims) / len(sims)
 
 
 def main() -> None:
