@@ -314,7 +314,8 @@ def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set
         # relative to its neighbours a storage sensor's residual is its own: the effect's shape
         # there in every operating state (Effect.unlike)
         e = ctx.meas[m, j] - y_before[m]
-        judged_on["unlike"] = effect.unlike([v], e, {k: f[:len(m)][m] for k, f in ctx.flags.items()})
+        states = ctx.roles.states(ctx.flags) if ctx.roles is not None else ctx.flags
+        judged_on["unlike"] = effect.unlike([v], e, {k: f[:len(m)][m] for k, f in states.items()})
     return Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
                   train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                   evaluations=nfev, sim=sim, effect=effect, local=judged_on)

@@ -93,6 +93,18 @@ class Roles:
         return {flag: np.logical_and.reduce([on[u] if state else ~on[u] for u, state in made])
                 for flag, _, made in self._modes}
 
+    def states(self, flags: dict) -> dict:
+        """The mode flags (of `flags`) and each unit's off-state the modes lack: the states a
+        sensor's own error is the same in (SensorOffset.unlike). A sensor at a port reads the
+        port's water only while that unit runs: rigsim house 2's tank sensor 2, at the heat pump's
+        lower return, read +2.8 K against the twin with the heat pump on and -3.0 K with it off,
+        and the modes had no "heat pump off" to show it."""
+        out = dict(flags)
+        for flag, _, made in self._modes:
+            if len(made) == 1 and made[0][1] and flag.endswith("_on"):
+                out.setdefault(flag[:-3] + "_off", ~flags[flag])
+        return out
+
     @property
     def pipes(self) -> dict:
         """Pipe sensor -> (its branch's flow, the command that starts the branch, its threshold)."""

@@ -9,14 +9,17 @@ from plant.diagnose.roles import of as roles_of
 # house 1's re-fitted nominals as the diagnosis had them written by hand before the kinds
 # declared them (key, relative tolerance, absolute bounds, keys taking the same value, re-fitted
 # with each candidate, calibrated first on): the coordinate descents are order-sensitive, so the
-# order is part of it
+# order is part of it. Since then each header is calibrated on its own sensor (it had one value
+# for both, calibrated on the two sensors together)
 HOUSE1 = [
     ("storage.UA_loss", 0.40, None, (), True, ()),
     ("radiator.Q_nominal", 0.10, None, (), True, ()),
     ("zone.H_direct", 0.10, None, (), True, ()),
     ("switch.storage_inlet_mixing", 0.0, (0.0, 0.05), (), True, ()),
-    ("supply_header.V", 0.0, (0.005, 0.05), ("return_header.V",), False, ("switch.T_sup", "switch.T_ret")),
-    ("supply_header.UA_loss", 0.0, (0.0, 3.0), ("return_header.UA_loss",), False, ("switch.T_sup", "switch.T_ret")),
+    ("supply_header.V", 0.0, (0.005, 0.05), (), False, ("switch.T_sup",)),
+    ("return_header.V", 0.0, (0.005, 0.05), (), False, ("switch.T_ret",)),
+    ("supply_header.UA_loss", 0.0, (0.0, 3.0), (), False, ("switch.T_sup",)),
+    ("return_header.UA_loss", 0.0, (0.0, 3.0), (), False, ("switch.T_ret",)),
     ("chp.V_water", 0.0, (0.0025, 0.03), (), False, ("chp.T_sup",)),
     ("dhw_pump.UA", 0.25, None, (), False, tuple(f"dhw_storage.T_sensor_{k}" for k in range(1, 11))),
 ]
@@ -36,8 +39,9 @@ def test_house2_knobs_are_named_for_its_own_instances_and_links():
             "supply_header.V", "heating_supply.V", "heat_pump.dT", "heat_pump.P_heat_nom"} <= set(keys)
     hp = next(q for q in calibration.knobs("house2") if q.key == "heat_pump.dT")
     assert hp.signals == ("heat_pump.m_flow",) and not hp.joint
-    header = next(q for q in calibration.knobs("house2") if q.key == "heating_supply.V")
-    assert header.also == ("heating_return.V",) and header.signals == ("heating.T_sup", "heating.T_ret")
+    header = {q.key: q for q in calibration.knobs("house2")}
+    assert header["heating_supply.V"].signals == ("heating.T_sup",)
+    assert header["heating_return.V"].signals == ("heating.T_ret",)
     # the bounds come from the house file's values
     params = {p.name: p for p in calibration.nominal_params("house2")}
     assert params["heat_pump.dT"].lo == pytest.approx(4.0) and params["heat_pump.dT"].hi == pytest.approx(6.0)
