@@ -38,6 +38,7 @@ SIZES = {"heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], "storage_U
          "collector_degradation": (lambda r: r["size"]["factor_of_file"], "eta0_factor"),
          "slab_capacity": (lambda r: r["size"]["factor_of_file"], "factor"),
          "coil_fouling": (lambda r: r["size"]["factor_of_file"], "factor"),
+         "port_valve_leakage": (lambda r: r["size"]["leak_share"], "leak_share"),
          "ground_collector_degradation": (lambda r: r["size"]["UA_W_per_K"], "UA_W_per_K")}
 
 

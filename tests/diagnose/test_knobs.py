@@ -81,10 +81,11 @@ def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
                                ("defrost_share", "heat_pump"), ("collector_degradation", "solar"),
                                ("coil_fouling", "solar"), ("slab_capacity", "floor"), ("valve_leakage", "mixer"),
                                ("heat_loss", "storage"), ("pipe_heat_loss", "supply_header"),
-                               ("storage_mixing", "storage")}
+                               ("storage_mixing", "storage"), ("port_valve_leakage", "hp_valve")}
     # a ground-source unit has no defrost
     assert ("defrost_share", "heat_pump") not in units("house3") and ("heat_pump_cop", "heat_pump") in units("house3")
-    assert {("ground_collector_degradation", "ground"), ("coil_fouling", "solar")} <= units("house3")
+    assert {("ground_collector_degradation", "ground"), ("coil_fouling", "solar"),
+            ("port_valve_leakage", "hp_branch")} <= units("house3")
     # house 1's catalogue is the one written for its instances before the candidates were bound
     # to kinds, in its order (the overrides are checked by the identity of its reports)
     assert [(e.id, e.component) for e in catalogue("house1")] == [

@@ -66,3 +66,28 @@ def test_bad_inlet_mixing_names_the_key_and_the_range():
     with pytest.raises(ConfigError) as e:
         load_house("house1", overrides={"switch.storage_inlet_mixing": 0.6})
     assert "storage_inlet_mixing" in str(e.value) and "half the storage volume" in str(e.value)
+
+
+def test_a_leaking_port_valve_charges_both_heights_and_keeps_the_balance():
+    """House 2's heat pump valve (a branch with { upper, lower } ports): leak = 0 is the closed
+    valve; a leak sends its share through the other port pair and the unit draws a mix of both
+    returns, so with the valve upper it returns warmer than the valve's own layer alone."""
+    rows, names = {}, None
+    for leak in (0.0, 0.3):
+        h = load_house("house2", start="2021-01-10", overrides={"hp_valve.leak": leak})
+        _, rows[leak] = h.run(DAY, dt=10.0, out_interval=600.0)
+        assert h.ledger()["closure"] < 1e-9
+        names = list(h.catalogue.names)
+    j = {n: names.index(n) for n in ("heat_pump.T_ret", "storage.T_sensor_2", "storage.T_sensor_9")}
+    assert not np.array_equal(rows[0.0], rows[0.3])
+    # the lower port pair takes part of the heat: against the closed valve the tank's top gains
+    # less (or loses more) than its bottom
+    bottom = rows[0.3][:, j["storage.T_sensor_2"]].mean() - rows[0.0][:, j["storage.T_sensor_2"]].mean()
+    top = rows[0.3][:, j["storage.T_sensor_9"]].mean() - rows[0.0][:, j["storage.T_sensor_9"]].mean()
+    assert bottom > top, (bottom, top)
+
+
+def test_bad_port_valve_leak_names_the_key_and_the_range():
+    with pytest.raises(ConfigError) as e:
+        load_house("house2", overrides={"hp_valve.leak": 0.7})
+    assert "hp_valve" in str(e.value) and "leak" in str(e.value) and "0 … 0.5" in str(e.value)

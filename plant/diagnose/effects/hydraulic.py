@@ -1,5 +1,8 @@
-"""Hydraulic candidates: flow through the idle CHP, pump coupling, valve leakage."""
+"""Hydraulic candidates: flow through the idle CHP, pump coupling, valve leakage (a mixing
+station's, a generator's three-way port valve)."""
 from __future__ import annotations
+
+import numpy as np
 
 from ...components.generator import Mode
 from .base import Effect, Param, UnitEffect, register
@@ -162,3 +165,43 @@ class ValveLeakage(UnitEffect):
 
     def summary(self, theta, ctx, sim=None):
         return f"{theta[0] * 100:.1f} % of the heating circuit flow through the closed mixing valve"
+
+
+def _valved(inst) -> bool:
+    return isinstance(inst.options.get("supply"), dict) or isinstance(inst.options.get("return"), dict)
+
+
+@register
+class PortValveLeakage(UnitEffect):
+    """A generator's three-way valve that does not close (branch.leak: a worn seat, an actuator
+    short of its end stop): a share of the unit's flow goes through the port pair the valve is not
+    set to, so the tank is charged at both heights and the unit draws a mix of both returns. It can
+    show only where the recorded valve takes both positions."""
+    id = "port_valve_leakage"
+    KINDS = ("branch",)
+    kind = "simulate"
+    params = (Param("leak", 0.0, 0.5, 0.0, "1 (share of the flow through the other port pair)"),)
+    description = ("a generator's three-way valve leaks: part of its flow goes through the storage port "
+                   "pair the valve is not set to (branch leak)")
+
+    @classmethod
+    def bound(cls, spec, roles) -> list:
+        return [(i.name, i.name) for i in spec.instances.values() if i.kind in cls.KINDS and _valved(i)]
+
+    def overrides(self, theta):
+        return {self.key("leak"): float(theta[0])}
+
+    def plausible(self, ctx):
+        cmd = self.key("upper")
+        if not ctx.rec.has(cmd):
+            return False, f"the recording has no {cmd}: which port pair the valve was set to is unknown"
+        up = np.nan_to_num(np.asarray(ctx.rec.data[cmd], float)) > 0.5
+        if min(up.mean(), 1.0 - up.mean()) < 0.02:
+            return False, f"{cmd} (almost) never changes its position in the recording, so a leak cannot show"
+        return True, ""
+
+    def summary(self, theta, ctx, sim=None):
+        return f"{self.component}: {theta[0] * 100:.1f} % of the flow through the port pair the valve is not set to"
+
+    def size(self, theta, ctx, sim=None):
+        return {"leak_share": float(theta[0])}
