@@ -221,7 +221,11 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     if not tried:
         return Result(effect.id, effect.component, effect.kind, False, "no eligible measured signal",
                       effect=effect)
-    return _signal_result(effect, ctx, nominal_sim, _best_tried(tried), nfev, alone)
+    # a storage sensor whose residual has another shape than the effect's (Effect.unlike) is not
+    # its signal: the next one is (rigsim house 2's sensor 2 at a port, +2.8 K with the heat pump
+    # on and -3.0 K with it off, took the offset candidate from a -2 K offset on sensor 4)
+    return _signal_result(effect, ctx, nominal_sim, _best_tried(tried, lambda x: not _unlike(effect, ctx, x)),
+                          nfev, alone)
 
 
 def _fit_on(effect, ctx, j, hf, y0, m):
@@ -286,15 +290,27 @@ def _try_signal(effect, ctx, nominal_sim, replayer, j, alone: bool) -> tuple[_Tr
                   s.rpartition(".T_sensor_")[0] if c is not None else None), nfev
 
 
-def _best_tried(tried: list) -> _Tried:
-    best = max(tried, key=lambda x: x.key)
+def _best_tried(tried: list, like=lambda x: True) -> _Tried:
+    """The signal a sensor candidate is named on, among those `like` accepts (all when none)."""
+    pool = [x for x in tried if like(x)] or tried
+    best = max(pool, key=lambda x: x.key)
     if best.tank is not None and best.key[0]:
         # among the sensors of that storage that pass, the one whose residual it removes most in
         # K^2: an offset d on one sensor leaves -d/2 on each neighbour's relative residual, which
         # an offset removes as wholly (by the share alone, labsim's +1.5 K on sensor 5 was once
         # fitted as -0.72 K on sensor 6)
-        best = max((x for x in tried if x.tank == best.tank and x.key[0]), key=lambda x: x.removed)
+        best = max((x for x in pool if x.tank == best.tank and x.key[0]), key=lambda x: x.removed)
     return best
+
+
+def _unlike(effect, ctx, x: _Tried) -> str:
+    """Effect.unlike on a storage sensor's training residual relative to its neighbours, in every
+    operating state (Roles.states); '' for any other signal."""
+    if x.tank is None:
+        return ""
+    m = ctx.train & ctx.ok[:, x.j]
+    states = ctx.roles.states(ctx.flags) if ctx.roles is not None else ctx.flags
+    return effect.unlike([x.value], ctx.meas[m, x.j] - x.y_before[m], {k: f[:len(m)][m] for k, f in states.items()})
 
 
 def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set) -> Result:
@@ -313,9 +329,7 @@ def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set
     if best.tank is not None:
         # relative to its neighbours a storage sensor's residual is its own: the effect's shape
         # there in every operating state (Effect.unlike)
-        e = ctx.meas[m, j] - y_before[m]
-        states = ctx.roles.states(ctx.flags) if ctx.roles is not None else ctx.flags
-        judged_on["unlike"] = effect.unlike([v], e, {k: f[:len(m)][m] for k, f in states.items()})
+        judged_on["unlike"] = _unlike(effect, ctx, best)
     return Result(effect.id, "sensor", effect.kind, True, theta=[v], stderr=[se], signal=ctx.measured[j],
                   train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                   evaluations=nfev, sim=sim, effect=effect, local=judged_on)
