@@ -292,6 +292,10 @@ class BrineKind(_HeatPump):
 
     name = "heat_pump_brine"
     Params = ParamsBrine
+    # its brine sensors sit on the pipes in the plant room: with the unit off the brine stands
+    # there and cools toward the room (rigsim house 3's null_b: 9.7 K held-out RMS on both while
+    # the twin's collector kept its brine at the ground's temperature)
+    SOURCE_PIPES = {"T_brine_in": "collector.m_flow", "T_brine_out": "collector.m_flow"}
     LINKS = {"collector": link(REQUIRED, "the ground collector its brine comes from", type=Instance,
                                range=("source",))}
 

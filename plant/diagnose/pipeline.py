@@ -12,6 +12,7 @@ import time
 from dataclasses import dataclass
 
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, requirements, search, unit_modes
+from . import unrepresented
 from . import report as report_mod
 from . import verdict as verdict_mod
 from .context import Context
@@ -207,6 +208,7 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
                                   "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in b.nominal.pipe.items()}
     rep["unit_modes"] = unit_modes.public(b.modes)
+    rep["unrepresented_sensors"] = unrepresented.find(ctx, ctx.nominal_sim)
     # in the catalogue's order: the fit keeps them in a set's, which differs between runs
     rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]])
                                     for sig, h in sorted(b.nominal.heights.items(),

@@ -14,7 +14,7 @@ heating runs, and each pair of generators on together.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from itertools import combinations
 
@@ -56,6 +56,8 @@ class Roles:
     subsystems: dict | None = None  # instance -> the subsystem the report localises a mismatch in
     loops: tuple = ()         # other units with a pump and pipe sensors (a solar loop)
     own_commands: tuple = ()  # inputs a kind's own control writes: replayed where recorded (COMMANDS)
+    source_pipes: dict = field(default_factory=dict)  # pipe sensor on a unit's source loop -> (its flow,
+    #                                                  the unit's command, threshold) (SOURCE_PIPES)
 
     def subsystem(self, signal: str) -> str:
         return (self.subsystems or {}).get(signal.split(".", 1)[0], "other")
@@ -108,8 +110,10 @@ class Roles:
     @property
     def pipes(self) -> dict:
         """Pipe sensor -> (its branch's flow, the command that starts the branch, its threshold)."""
-        return {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits, *self.loops)
-                for p in u.pipes}
+        out = {p: (u.flow, u.command, u.on_above) for u in (*self.generators, *self.circuits, *self.loops)
+               for p in u.pipes}
+        out.update(self.source_pipes)
+        return out
 
     def unfollowed(self, data) -> dict:
         """Loop (a unit with its own control) -> its number of runs, for each loop whose recorded
@@ -180,7 +184,19 @@ def of(house="house1") -> Roles:
         n = b.options.get("sensors", 10) if isinstance(b.options.get("sensors"), int) else 10
         buffer = (b.name, float(b.params.volume), tuple(f"{b.name}.T_sensor_{k}" for k in range(1, n + 1)))
     return Roles(str(house), generators, circuits, chargers, commands, substitutes, unmeasured,
-                 catalogue_of(house), buffer, _subsystems(inst), loops, own)
+                 catalogue_of(house), buffer, _subsystems(inst), loops, own, _source_pipes(runs))
+
+
+def _source_pipes(runs) -> dict:
+    """Pipe sensor on a unit's source loop (SOURCE_PIPES) -> (the loop's flow, the unit's RUN
+    command, its threshold): the loop runs when the unit does."""
+    out = {}
+    for i in runs:
+        k = KINDS[i.kind]
+        for sensor, flow in k.SOURCE_PIPES.items():
+            link, output = flow.split(".", 1)
+            out[f"{i.name}.{sensor}"] = (f"{i.options[link]}.{output}", f"{i.name}.{k.RUN[0]}", k.RUN[1])
+    return out
 
 
 def _subsystems(inst) -> dict:

@@ -127,6 +127,8 @@ def _judged_local(r, n_eff):
                   "no sensor-own mismatch; rejected")
     elif d.get("unlike"):
         reason = f"{what}: {d['unlike']}; rejected"
+    elif small := r.effect.within(r.theta, d["limit"]):
+        reason = f"{what}: {small}; rejected"
     elif d["gain"] < LOCAL_GAIN:
         reason = f"{what}: removes {d['gain'] * 100:.0f} % < {LOCAL_GAIN * 100:.0f} % of its residual; rejected"
     elif r.bic >= b0:

@@ -230,12 +230,13 @@ def test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect(t
 
 def test_a_candidate_within_the_nominal_refit_range_is_a_calibration_not_missing_physics():
     """A heat loss the nominal re-fit could have given itself (17-23 W/K around the file's 20) is
-    not named: its held-out gain is the drift of a calibrated value between the two windows. Both
-    headers of a pair carry the re-fit's range; a value beyond the range is judged as before."""
+    not named: its held-out gain is the drift of a calibrated value between the two windows. Each
+    header carries its re-fit's range; a value beyond the range is judged as before."""
     from types import SimpleNamespace
 
     nref = {"parameters": [{"name": "storage.UA_loss", "bounds": [17.0, 23.0]},
-                           {"name": "supply_header.UA_loss", "bounds": [0.0, 3.0]}]}
+                           {"name": "supply_header.UA_loss", "bounds": [0.0, 3.0]},
+                           {"name": "return_header.UA_loss", "bounds": [0.0, 3.0]}]}
     ranges = calibration.ranges(nref, calibration.knobs("house1"))
     assert ranges == {"storage.UA_loss": (17.0, 23.0), "supply_header.UA_loss": (0.0, 3.0),
                       "return_header.UA_loss": (0.0, 3.0)}

@@ -59,6 +59,13 @@ def test_a_solar_stations_own_pump_is_replayed_where_recorded_and_its_loop_has_p
     assert "own control" not in "\n".join(lines(requirements("house1")))
 
 
+def test_a_brine_heat_pumps_brine_sensors_are_pipe_sensors_on_its_collectors_loop():
+    # the loop is the collector's (through the heat pump's `collector` link), started by the unit
+    pipes = roles_of("house3").pipes
+    assert pipes["heat_pump.T_brine_in"] == pipes["heat_pump.T_brine_out"] == ("ground.m_flow", "heat_pump.on", 0.5)
+    assert not any("brine" in s for s in roles_of("house2").pipes)
+
+
 class _Rec:
     def __init__(self, names):
         self.names = set(names)

@@ -42,8 +42,9 @@ def test_a_residual_missing_in_one_state_is_not_an_offset():
 
 
 def test_an_offset_that_is_not_constant_is_rejected_with_that_reason():
-    """fit_signal records the shape check on a storage sensor (Result.local['unlike']), and the
-    verdict rejects the candidate with it though it removes most of the sensor's own residual."""
+    """fit_signal passes over a storage sensor whose residual has not the offset's shape; fitted on
+    that sensor alone it records the shape check (Result.local['unlike']), and the verdict rejects
+    the candidate with it though it removes most of the sensor's own residual."""
     rec = synth.make("none", days=1.0, noise=False)
     ctx = Context.build(rec, train_days=0.5)
     sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0)
@@ -51,7 +52,8 @@ def test_an_offset_that_is_not_constant_is_rejected_with_that_reason():
     state = ctx.flags["heating_on"]
     assert STATE_SHARE < state[ctx.train].mean() < 1.0 - STATE_SHARE
     sim[:, j] -= np.where(state, 0.0, 2.0)      # reads 2 K high only while the heating is off
-    r = fit.fit_signal(OFFSET, ctx, sim)
+    assert fit.fit_signal(OFFSET, ctx, sim).signal != "storage.T_sensor_5"
+    r = fit.fit_signal(OFFSET, ctx, sim, only="storage.T_sensor_5")
     assert r.signal == "storage.T_sensor_5"
     assert r.local["unlike"].startswith("not constant: with ")  # the first state where it is not
     judged = verdict._judged_local(r, n_eff=100.0)

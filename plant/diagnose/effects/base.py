@@ -71,6 +71,12 @@ class Effect:
         ({name: mask over e}); else why not, in words. Default: any shape."""
         return ""
 
+    def within(self, theta, limit: float) -> str:
+        """kind "signal", judged on its sensor's own residual: '' unless the fitted effect is itself
+        no larger than what a correct replay may leave on that sensor (`limit`, Context.limit);
+        then why, in words. Default: never."""
+        return ""
+
     def fitted(self, ctx) -> list[int]:
         """Indices of the parameters the recording can identify (the others stay at their
         nominal value); default: all. Counted as the candidate's k in the BIC."""
