@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,7 +74,7 @@ class Context:
     # and override key -> (lo, hi) the nominal re-fit may take
     nominal: object = None
     nominal_sim: np.ndarray | None = None
-    alone: dict | None = None
+    alone: tuple = ()   # each {instances, signals}: a subsystem replayed alone
     calibrated: tuple = ()
     nominal_ranges: dict = field(default_factory=dict)
     calibration: dict = field(default_factory=dict)  # override key -> the value every replay starts from
@@ -114,7 +115,7 @@ class Context:
         return cls(rec, measured, train, held, meas, ok, scale, noise, roles.flags(rec.data),
                    cols=np.array([roles.catalogue.index(s) for s in measured]), t_split=t_split, roles=roles)
 
-    def with_baseline(self, nominal, alone: dict | None, calibrated: tuple, nominal_ranges: dict,
+    def with_baseline(self, nominal, alone: tuple, calibrated: tuple, nominal_ranges: dict,
                       calibration: dict | None = None) -> "Context":
         """This context judged against the nominal replay `nominal` (a replay.Replay)."""
         return dataclasses.replace(self, nominal=nominal, nominal_sim=nominal.rows[:, self.cols], alone=alone,
@@ -131,6 +132,12 @@ class Context:
     def modes(self) -> dict:
         """Mode flag -> its words in the report."""
         return self.roles.modes()
+
+    @functools.cached_property
+    def states(self) -> dict:
+        """Operating state -> mask: the mode flags and each single unit's off-state (Roles.states).
+        Cached: a frozen context's flags never change (a stage that masks modes makes a new one)."""
+        return self.roles.states(self.flags) if self.roles is not None else dict(self.flags)
 
     def unit(self, signal: str) -> str:
         """A signal's unit (the replayed house's catalogue)."""

@@ -203,14 +203,13 @@ def fit_signal(effect, ctx, nominal_sim, replayer=None, only: str | None = None)
     it reduces by the largest share on training (a sensor effect explains its sensor's residual
     nearly whole; a structural difference it imitates, only in part). On a storage sensor the effect acts on the twin's
     value plus the neighbours' common residual (common_mode) and is judged there (Result.local);
-    on the return of the radiator replayed alone (replayer given) it is fitted jointly with the
-    radiator's rating and water content and judged on that return alone (Result.local). only: fit
+    on the return of the emitter replayed alone (replayer given) it is fitted jointly with the
+    emitter's calibrated parameters and judged on that return alone (Result.local). only: fit
     on that signal alone (a sensor effect fitted again on another model's reading)."""
-    from .cut import RADIATOR_OUTPUTS
-
     tried = []
     nfev = 0
-    alone = set(RADIATOR_OUTPUTS) if replayer is not None and "radiator" in replayer.calibrated else set()
+    hc = replayer.heating if replayer is not None else None
+    alone = set(hc.emitter_outputs) if hc is not None and hc.emitter in replayer.calibrated else set()
     for j, s in enumerate(ctx.measured):
         if ctx.unit(s) not in effect.signal_units or (only is not None and s != only):
             continue
@@ -246,7 +245,7 @@ def _fit_on(effect, ctx, j, hf, y0, m):
 
 def _try_signal(effect, ctx, nominal_sim, replayer, j, alone: bool) -> tuple[_Tried | None, int]:
     """The candidate fitted on measured signal j on the training window -> (_Tried, or None with
-    fewer than 10 usable training samples; evaluations). alone: j is a return of the radiator
+    fewer than 10 usable training samples; evaluations). alone: j is the return of the emitter
     replayed alone."""
     s = ctx.measured[j]
     c = common_mode(ctx, nominal_sim, j)
@@ -266,7 +265,7 @@ def _try_signal(effect, ctx, nominal_sim, replayer, j, alone: bool) -> tuple[_Tr
     y_before = placed(ctx.meas[:, j], y0, m, hf)
     v, J, nfev, f = fit_on(y0)
     if alone:
-        # the radiator replayed alone: its rating, water content and element count are
+        # the emitter replayed alone: its rating, water content and element count are
         # re-fitted jointly with the candidate (a larger radiator delays its return too:
         # calibrated without the candidate it absorbs part of a sensor's delay). Each radiator
         # the re-fit tries takes the candidate's best value for it (one parameter over a
@@ -275,8 +274,8 @@ def _try_signal(effect, ctx, nominal_sim, replayer, j, alone: bool) -> tuple[_Tr
         def joint(y, m=m & replayer.circuit_flowing(settled=True)):
             return effect.apply(ctx.rec.time[:len(y)], y, [fit_on(y, m)[0]])
 
-        vals, N = replayer.refit_radiator(joint, ctx.train)
-        y0 = replayer.radiator_return(vals, N, ctx.nominal.pipe)
+        vals, N = replayer.refit_emitter(joint, ctx.train)
+        y0 = replayer.emitter_return(vals, N, ctx.nominal.pipe)
         v, J, k, f = fit_on(y0)
         nfev += k
     J0 = float(np.mean((ctx.meas[m, j] - y_before[m]) ** 2))
@@ -309,8 +308,7 @@ def _unlike(effect, ctx, x: _Tried) -> str:
     if x.tank is None:
         return ""
     m = ctx.train & ctx.ok[:, x.j]
-    states = ctx.roles.states(ctx.flags) if ctx.roles is not None else ctx.flags
-    return effect.unlike([x.value], ctx.meas[m, x.j] - x.y_before[m], {k: f[:len(m)][m] for k, f in states.items()})
+    return effect.unlike([x.value], ctx.meas[m, x.j] - x.y_before[m], {k: f[:len(m)][m] for k, f in ctx.states.items()})
 
 
 def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set) -> Result:
@@ -348,6 +346,6 @@ def _judged_on(ctx, j, y_before, sim, alone: set) -> dict:
     if ctx.measured[j] in alone:
         # calibrated on this very signal, the subsystem alone has no structural allowance to
         # keep: its residual is a mismatch above the sensor's noise (3 sigma)
-        judged_on["what"] = f"{ctx.measured[j]} (radiator replayed alone, re-fitted with the candidate)"
+        judged_on["what"] = f"{ctx.measured[j]} (emitter replayed alone, re-fitted with the candidate)"
         judged_on["limit"] = ctx.limit(j, tol=0.0)
     return judged_on

@@ -36,7 +36,7 @@ class Baseline:
     replayer: replay.Replayer
     nominal: replay.Replay
     refit: dict                 # calibration.refit_nominal's entry (its "params": re-fitted with candidates)
-    radiator: dict | None       # the radiator replayed alone, calibrated (Replayer.calibrate_radiator)
+    emitter: dict | None        # the emitter replayed alone, calibrated (Replayer.calibrate_emitter)
     mixer: dict | None          # the mixing station replayed alone, calibrated
     modes: dict                 # unit_modes.identify
     warnings: tuple
@@ -87,13 +87,14 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     lacks masked, then the nominal re-fit (calibration.knobs, narrow bounds; its
     identifiability's replays in up to `jobs` processes)."""
     ctx, rp = p.ctx, p.replayer
-    radiator = rp.calibrate_radiator(ctx.train)
+    emitter = rp.calibrate_emitter(ctx.train)
     calibrated = ()
-    if radiator and radiator["calibrated"]:
-        rp = rp.with_calibration(radiator["values"], {"radiator"}, radiator["elements"])
-        calibrated = tuple(replay.cut_mod.RADIATOR_OUTPUTS)
-        log(f"radiator alone: {radiator['elements']} elements, " + ", ".join(
-            f"{k} {v:.4g}" for k, v in radiator["values"].items()) + f", return RMS {radiator['rms_K']:.3g} K")
+    hc = rp.heating
+    if emitter and emitter["calibrated"]:
+        rp = rp.with_calibration(emitter["values"], {hc.emitter}, emitter["elements"])
+        calibrated = hc.emitter_outputs
+        log(f"{hc.noun} alone: {emitter['elements']} element(s), " + ", ".join(
+            f"{k} {v:.4g}" for k, v in emitter["values"].items()) + f", return RMS {emitter['rms_K']:.3g} K")
     mixer = rp.calibrate_mixer(ctx.train)
     if mixer and mixer["calibrated"]:
         rp = rp.with_calibration(mixer["values"])
@@ -118,19 +119,21 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
         log("nominal re-fit: " + ", ".join(f"{q['name']} {q['file_value']:.4g} -> {q['fitted_value']:.4g}"
                                            for q in nref["parameters"]))
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
-    alone = {"instances": {"mixer"}, "signals": list(replay.cut_mod.CIRCUIT_OUTPUTS)} if rp.circuit else None
+    alone = ((({"instances": {hc.station}, "signals": list(hc.station_outputs)},) if rp.circuit else ())
+             + (({"instances": {hc.emitter}, "signals": list(hc.emitter_outputs)},) if rp.emitter else ()))
     ctx = ctx.with_baseline(nominal, alone, calibrated, ranges, rp.base)
     J0t, J0h = ctx.cost(ctx.nominal_sim, ctx.train), ctx.cost(ctx.nominal_sim, ctx.held)
     log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "
         f"({len(ctx.measured)} measured signals)")
-    return Baseline(ctx, rp, nominal, nref, radiator, mixer, modes, tuple(warnings), J0t, J0h)
+    return Baseline(ctx, rp, nominal, nref, emitter, mixer, modes, tuple(warnings), J0t, J0h)
 
 
 def locate_mismatch(b: Baseline) -> Location:
     ctx, rp, sim0 = b.ctx, b.replayer, b.ctx.nominal_sim
     affected = locate.mismatched_signals(ctx, sim0, ctx.held)
     summary = {"replay": {"plant": rp.plant_label, "cut": rp.cut.name if rp.cut else None,
-                          "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit},
+                          "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit,
+                          "emitter_alone": rp.emitter},
                "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
                "windows": locate.windows(ctx, sim0), "modes": locate.modes(ctx, sim0)[:6],
                "mismatched_signals": affected}
@@ -150,8 +153,8 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
             results.append(fit.Result(e.id, e.component, e.kind, False,
                                       f"{rp.house_name} has no {e.component}", effect=e))
             continue
-        # a unit's own candidate on a unit the cut replaced (unless replayed alone: house 1's
-        # station and radiators, cut._alone)
+        # a unit's own candidate on a unit the cut replaced (unless replayed alone: the heating
+        # circuit's station and emitter, emitter.of)
         if isinstance(e, UnitEffect) and e.at in rp.removed - rp.alone_instances:
             results.append(fit.Result(e.id, e.component, e.kind, False, f"the replay's cut puts measurements where "
                                       f"{e.component} was ({rp.plant_label})", effect=e))
@@ -181,7 +184,10 @@ def select(b: Baseline, loc: Location, results: tuple) -> Selection:
     of the named one (forward.py), and search regression terms for what stays unexplained."""
     ctx = b.ctx
     judged = verdict_mod.judge(results, ctx, b.train_cost, b.held_cost)
-    verdict, best, twins, explained, judged = verdict_mod.select(judged, ctx, ctx.nominal_sim, list(loc.affected))
+    em = b.emitter or {}
+    pinned = b.replayer.heating.emitter_outputs if em.get("calibrated") and em.get("at_bound") else ()
+    verdict, best, twins, explained, judged = verdict_mod.select(judged, ctx, ctx.nominal_sim, list(loc.affected),
+                                                                 pinned)
     chosen = forward.extend(best, judged, twins, ctx, b.replayer) if verdict == "missing_physics" else []
     # the report's "after": the model that holds every chosen effect (the best alone when only it)
     final = forward.final(chosen) if len(chosen) > 1 else best
@@ -199,7 +205,7 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
         rep["finding"] += "; together with " + ", ".join(
             f"{r.id} ({r.effect.summary(r.theta, ctx, r.rows)}{' on ' + r.signal if r.signal else ''}, held-out "
             f"gain {100 * r.held_gain:.0f} % over the model before it)" for r in s.chosen[1:])
-    rep["radiator_calibration"] = b.radiator
+    rep["emitter_calibration"] = b.emitter
     rep["mixer_calibration"] = b.mixer
     # the nominal twin's fits, and the named model's where a plant effect changed its flows
     named = s.final.pipe if s.final is not None else {}

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from . import cut as cut_mod
+from . import emitter as emitter_mod
 from . import pipe_sensor, sensor_height
 from . import roles as roles_mod
 from .requirements import BOUNDARY
@@ -86,7 +87,7 @@ class Replayer:
     recording), with the sensor reading models fitted to it.
 
     A calibration never changes a replayer: it returns values, and `with_calibration` gives the
-    replayer every later run uses (base overrides, the instances calibrated alone, the radiator's
+    replayer every later run uses (base overrides, the instances calibrated alone, the emitter's
     element count, the end of the training window)."""
 
     def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True, require_cut: bool = False):
@@ -95,11 +96,14 @@ class Replayer:
         self.init_from_sensors = init_from_sensors
         self.t = rec.time
         self.cut, self.circuit = cut_mod.select(rec, house, required=require_cut)
-        self.radiator = cut_mod.radiator_alone(rec, self.cut)
+        self.emitter = cut_mod.emitter_alone(rec, self.cut, house)
+        # the heating circuit by role (its station, coupling point, emitter, zone): emitter.of
+        self.heating = emitter_mod.of(house)
         removed = set(self.cut.removes) if self.cut else set()
         self.removed = removed
         # the instances the cut removed that are replayed alone between their measured interfaces
-        self.alone_instances = ({"mixer"} if self.circuit else set()) | ({"radiator"} if self.radiator else set())
+        self.alone_instances = (({self.heating.station} if self.circuit else set())
+                                | ({self.heating.emitter} if self.emitter else set()))
         # what the replay loads (a derived cut's file) and what the report calls it
         self.plant_name = str(self.cut.path()) if self.cut else house
         self.plant_label = self.cut.label if self.cut else str(house)
@@ -114,8 +118,8 @@ class Replayer:
             self.notes.append(f"replayed on the cut {self.plant_label}: {self.cut.why}"
                               + ("; the mixing station replayed alone between its measured interfaces"
                                  if self.circuit else "")
-                              + ("; the radiator circuit replayed alone (measured flow, supply and room "
-                                 "-> return)" if self.radiator else "")
+                              + (f"; the {self.heating.noun} replayed alone (measured flow, supply and room "
+                                 "-> return)" if self.emitter else "")
                               + f"; the cut's house file (derived from {house}): {self.plant_name}")
         self._checked = False
         # the plant's rows by (overrides, samples), shared by the replayers with_calibration makes:
@@ -131,24 +135,24 @@ class Replayer:
         # the end of the training window: the pipe sensors' cooling time models and the storage
         # sensors' places are fitted up to it (pipe_sensor.py, sensor_height.py)
         self.t_train: float | None = None
-        # the radiator alone's element count and the instances calibrated on their own subsystem
-        # (calibrate_radiator): the nominal re-fit leaves those alone
-        self.radiator_elements = 5
+        # the emitter alone's element count and the instances calibrated on their own subsystem
+        # (calibrate_emitter): the nominal re-fit leaves those alone
+        self.emitter_elements = self.heating.default_elements if self.heating else 1
         self.calibrated: frozenset = frozenset()
         self._layout()
         self.room = self._plant_room()
         self.heights = self.tank_heights()
 
-    def with_calibration(self, base: dict | None = None, calibrated=(), radiator_elements: int | None = None,
+    def with_calibration(self, base: dict | None = None, calibrated=(), emitter_elements: int | None = None,
                          t_train: float | None = None) -> "Replayer":
         """A replayer like this one whose runs start from `base` on top of this one's, with the
-        instances `calibrated` alone added (and the radiator's element count, the end of the
+        instances `calibrated` alone added (and the emitter's element count, the end of the
         training window, where given)."""
         out = copy.copy(self)
         out.base = {**self.base, **(base or {})}
         out.calibrated = self.calibrated | frozenset(calibrated)
-        if radiator_elements is not None:
-            out.radiator_elements = radiator_elements
+        if emitter_elements is not None:
+            out.emitter_elements = emitter_elements
         if t_train is not None:
             out.t_train = t_train
         return out
@@ -167,9 +171,9 @@ class Replayer:
                 if s.name not in inputs and s.causality == "output":
                     simulated.append(s.name)
         if self.circuit:
-            simulated += list(cut_mod.CIRCUIT_OUTPUTS)
-        if self.radiator:
-            simulated += list(cut_mod.RADIATOR_OUTPUTS)
+            simulated += list(self.heating.station_outputs)
+        if self.emitter:
+            simulated += list(self.heating.emitter_outputs)
         self.simulated = set(simulated)  # catalogue names the replay computes (the others are not compared)
 
     def _lab_ports(self) -> dict:
@@ -227,7 +231,7 @@ class Replayer:
         return set(load(self.plant_name).instances) | self.alone_instances
 
     def _init_storage(self, house) -> None:
-        for comp in ("storage", "dhw_storage"):
+        for comp in self.heights:  # the replayed plant's storages
             names = [f"{comp}.T_sensor_{i}" for i in range(1, 11)]
             if not all(self.rec.has(n) for n in names):
                 continue
@@ -281,8 +285,7 @@ class Replayer:
         n = len(self.t) if until is None else int(np.searchsorted(self.t, until, side="right"))
         plant_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] not in self.removed}
         sub_ov = {k: v for k, v in ov.items() if k.split(".", 1)[0] in self.removed}
-        lost = [k for k in sub_ov if not ((self.circuit and k.startswith("mixer."))
-                                          or (self.radiator and k.startswith("radiator.")))]
+        lost = [k for k in sub_ov if k.split(".", 1)[0] not in self.alone_instances]
         if lost:
             raise ConfigError(f"replay on {self.plant_label}: override(s) {', '.join(lost)} address instances the "
                               f"cut replaces by measured boundaries ({', '.join(sorted(self.removed))})")
@@ -292,11 +295,11 @@ class Replayer:
         for inp, sig in self.bound.items():
             out[:, self.roles.catalogue.index(sig)] = self.rec.data[sig][:n]
         if self.circuit:
-            for sig, v in self._alone("mixer.", sub_ov, n, cut_mod.replay_circuit).items():
+            for sig, v in self._alone(f"{self.heating.station}.", sub_ov, n, cut_mod.replay_circuit).items():
                 out[:, self.roles.catalogue.index(sig)] = v
-        if self.radiator:
-            for sig, v in self._alone("radiator.", sub_ov, n, cut_mod.replay_radiator,
-                                      self.radiator_elements).items():
+        if self.emitter:
+            for sig, v in self._alone(f"{self.heating.emitter}.", sub_ov, n, emitter_mod.replay,
+                                      self.emitter_elements).items():
                 out[:, self.roles.catalogue.index(sig)] = v
         cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = self.t_train if until is None else min(self.t_train or until, until)
@@ -308,8 +311,8 @@ class Replayer:
 
     def circuit_flowing(self, settled: bool = False) -> np.ndarray:
         """The samples at which the heating circuit flows (settled: and flowed the sample before,
-        so the radiator's return is its own and not the stagnant pipe's)."""
-        flow = np.nan_to_num(self.rec.data["mixer.m_flow"]) > pipe_sensor.FLOWING
+        so the emitter's return is its own and not the stagnant pipe's)."""
+        flow = np.nan_to_num(self.rec.data[self.heating.emitter_inputs[0]]) > pipe_sensor.FLOWING
         return flow & np.roll(flow, 1) if settled else flow
 
     def _circuit_training(self, train: np.ndarray, signal: str, what: str, keeps: str):
@@ -324,19 +327,18 @@ class Replayer:
         self.notes.append(f"{what} not calibrated: {why}")
         return None, {"calibrated": False, "why": why}
 
-    def calibrate_radiator(self, train: np.ndarray) -> dict | None:
-        """Calibrate the radiator replayed alone on the recorded return over the training samples
-        at which the circuit flows (cut.calibrate_radiator). -> report entry ({calibrated, values,
-        elements, ...}; with_calibration applies it) or None without a radiator alone."""
-        if not self.radiator:
+    def calibrate_emitter(self, train: np.ndarray) -> dict | None:
+        """Calibrate the emitter replayed alone on the recorded return over the training samples
+        at which the circuit flows (emitter.calibrate). -> report entry ({calibrated, values,
+        elements, ...}; with_calibration applies it) or None without an emitter alone."""
+        if not self.emitter:
             return None
         mask, skipped = self._circuit_training(
-            train, "mixer.T_ret", "radiator alone",
-            f"the radiator alone keeps the house file's rating and water content in {self.radiator_elements} "
-            "elements, and the nominal re-fit its rating")
+            train, self.heating.emitter_outputs[0], f"{self.heating.noun} alone",
+            f"the {self.heating.noun} alone keeps the house file's values in {self.emitter_elements} element(s)")
         if skipped:
-            return {**skipped, "elements": self.radiator_elements}
-        return {**cut_mod.calibrate_radiator(self.rec, self.house_name, mask), "calibrated": True}
+            return {**skipped, "elements": self.emitter_elements}
+        return {**emitter_mod.calibrate(self.rec, self.house_name, mask), "calibrated": True}
 
     def calibrate_mixer(self, train: np.ndarray) -> dict | None:
         """Calibrate the mixing station replayed alone on the recorded supply after mixing over
@@ -344,30 +346,32 @@ class Replayer:
         ({calibrated, values, ...}) or None without a mixing station alone."""
         if not self.circuit:
             return None
-        mask, skipped = self._circuit_training(train, "mixer.T_sup", "mixing station alone",
+        mask, skipped = self._circuit_training(train, self.heating.station_outputs[0], "mixing station alone",
                                                "the mixing station keeps the house file's actuator and gain")
         if skipped:
             return skipped
         return {**cut_mod.calibrate_mixer(self.rec, self.house_name, mask), "calibrated": True}
 
-    def radiator_return(self, values: dict, elements: int | None, pipe: dict) -> np.ndarray:
-        """The compared mixer.T_ret of the radiator alone with `values` (radiator overrides) and
-        `elements` (None: the calibrated count) over the whole recording, read through the
-        pipe-sensor fits `pipe` (a Replay's)."""
-        ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith("radiator.")}
-        y = cut_mod.replay_radiator(self.rec, self.house_name, ov, len(self.t),
-                                    elements or self.radiator_elements)["mixer.T_ret"]
-        fit = pipe.get("mixer.m_flow", pipe_sensor.AS_SIMULATED_FIT)
-        return pipe_sensor.cooled(self.t, y, self.rec.data["mixer.m_flow"], fit, self.room.T)
+    def emitter_return(self, values: dict, elements: int | None, pipe: dict) -> np.ndarray:
+        """The compared return of the emitter alone with `values` (its overrides) and `elements`
+        (None: the calibrated count) over the whole recording, read through the pipe-sensor fits
+        `pipe` (a Replay's)."""
+        h = self.heating
+        ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith(f"{h.emitter}.")}
+        y = emitter_mod.replay(self.rec, self.house_name, ov, len(self.t),
+                               elements or self.emitter_elements)[h.emitter_outputs[0]]
+        flow = h.emitter_inputs[0]
+        fit = pipe.get(flow, pipe_sensor.AS_SIMULATED_FIT)
+        return pipe_sensor.cooled(self.t, y, self.rec.data[flow], fit, self.room.T)
 
-    def refit_radiator(self, transform, mask: np.ndarray) -> tuple:
-        """The radiator alone re-fitted with a sensor candidate's `transform` on its return
-        (jointly, as the nominal re-fit is with a plant candidate): rating and water content, and
-        the element count next to the calibrated one. -> (values, elements)."""
-        start = {k: v for k, v in self.base.items() if k in cut_mod.RADIATOR_BOUNDS}
-        near = [N for N in cut_mod.RADIATOR_ELEMENTS if abs(N - self.radiator_elements) <= 1]
-        fits = {N: cut_mod.fit_radiator(self.rec, self.house_name, mask & self.circuit_flowing(settled=True), N, start,
-                                        transform) for N in near}
+    def refit_emitter(self, transform, mask: np.ndarray) -> tuple:
+        """The emitter alone re-fitted with a sensor candidate's `transform` on its return
+        (jointly, as the nominal re-fit is with a plant candidate): its calibrated parameters,
+        and the element count next to the calibrated one. -> (values, elements)."""
+        start = {k: v for k, v in self.base.items() if k in self.heating.bounds}
+        near = [N for N in self.heating.elements if abs(N - self.emitter_elements) <= 1]
+        fits = {N: emitter_mod.fit(self.rec, self.house_name, mask & self.circuit_flowing(settled=True), N, start,
+                                   transform) for N in near}
         N = min(fits, key=lambda q: fits[q][1])
         return fits[N][0], N
 

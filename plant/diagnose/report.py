@@ -185,7 +185,7 @@ def flag_bounds(rep, results) -> None:
     that ended on a bound of their range; the finding names them."""
     flags = [{"parameter": p["name"], "value": p["fitted_value"], "bounds": p["bounds"], "stage": "calibration"}
              for p in rep["nominal_refit"]["parameters"] if p.get("at_bound")]
-    for key in ("radiator_calibration", "mixer_calibration"):  # the subsystems calibrated alone
+    for key in ("emitter_calibration", "mixer_calibration"):  # the subsystems calibrated alone
         cal = rep.get(key) or {}
         flags += [{"parameter": name, "value": cal["values"][name], "bounds": cal["bounds"][name],
                    "stage": "calibration"} for name in (cal.get("at_bound") or []) if cal.get("calibrated")]

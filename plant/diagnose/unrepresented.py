@@ -8,7 +8,8 @@ pump's lower return port, read +2.8 K against the twin with the heat pump on and
 off, in every case of the suite, the no-effect ones included.
 
 Such a sensor is reported (report.json `unrepresented_sensors`) with what it reads in each
-state; a sensor candidate passes it over (fit._unlike). The limit is the one mismatch limit of
+state. It changes no verdict: a sensor candidate passes such a sensor over by the offset's own
+shape check in every state (fit._unlike, SensorOffset.unlike), not by this list. The limit is the one mismatch limit of
 the signal (Context.limit): a state mean beyond it, with either sign, in states that each
 cover at least STATE_SHARE of the recording (the sensor offset's own, effects/sensor.py), both
 relative to its neighbours and of its own reading (a neighbour's relative residual mirrors it).
@@ -25,7 +26,7 @@ def find(ctx, sim: np.ndarray) -> dict:
     """{storage sensor: {"state_means_K": {state: mean relative residual}, "limit_K", "why"}} of the
     measured storage sensors whose residual relative to their neighbours, in the replay `sim`
     (measured columns), is beyond their limit with one sign in one state and the other in another."""
-    states = ctx.roles.states(ctx.flags) if ctx.roles is not None else dict(ctx.flags)
+    states = ctx.states
     out = {}
     for j, s in enumerate(ctx.measured):
         c = common_mode(ctx, sim, j)

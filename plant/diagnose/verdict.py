@@ -91,14 +91,12 @@ def _judged(r, ctx, n_eff, b0, nominal_held):
 
 def _alone(r, ctx) -> dict | None:
     """A plant candidate whose overrides all address a subsystem replayed alone between measured
-    interfaces (the mixing station, cut.replay_circuit) is judged on that subsystem's outputs: a
-    residual there is the subsystem's own, while the rest of the cost carries the plant
-    replay's differences it cannot touch."""
-    alone = ctx.alone
-    if not alone:
-        return None
+    interfaces (the mixing station, cut.replay_circuit; the emitter, emitter.replay) is judged on
+    that subsystem's outputs: a residual there is the subsystem's own, while the rest of the cost
+    carries the plant replay's differences it cannot touch."""
     keys = r.effect.overrides([p.nominal for p in r.effect.params])
-    if not keys or any(k.split(".", 1)[0] not in alone["instances"] for k in keys):
+    alone = next((a for a in ctx.alone if keys and all(k.split(".", 1)[0] in a["instances"] for k in keys)), None)
+    if alone is None:
         return None
     idx = [ctx.measured.index(s) for s in alone["signals"] if s in ctx.measured]
     if not idx:
@@ -142,7 +140,7 @@ def _judged_local(r, n_eff):
     return dataclasses.replace(r, accepted=accepted, reason=reason)
 
 
-def select(results, ctx, nominal_sim, affected):
+def select(results, ctx, nominal_sim, affected, pinned=()):
     """-> (verdict, best Result or None, indistinguishable ids, explained share, the results with
     the reason a candidate is not named added to it).
 
@@ -160,7 +158,9 @@ def select(results, ctx, nominal_sim, affected):
     mismatch, reported (locate.beyond_tolerance in report.json) and not held against it.
     Within that accuracy the rest of the excess is the replay's own (an independent plant differs
     by a few K anyway). With no candidate accepted: unexplained_mismatch when the nominal mismatch
-    is beyond that accuracy, else no_missing_physics."""
+    is beyond that accuracy, else no_missing_physics. pinned: the outputs of a subsystem
+    calibrated alone onto a bound of its tolerance; mismatched (affected), they are beyond that
+    accuracy whatever their size."""
     from .locate import beyond_tolerance
 
     # ranked by held-out gain: a sensor candidate's on its own residual relative to its
@@ -168,7 +168,10 @@ def select(results, ctx, nominal_sim, affected):
     acc = sorted([r for r in results if r.accepted], key=lambda r: -r.held_gain)
     if not affected:
         return "no_missing_physics", None, [], 0.0, results
-    beyond = beyond_tolerance(ctx, nominal_sim, ctx.held)
+    # an emitter whose rating calibrates onto its bound (0.6 ... 1.4 x the file) cannot give what
+    # it was calibrated on: rigsim house 2's floor at 0.55 of its rating left 0.7 K held-out on the
+    # return, inside the plant replay's 5 K, with the rating pinned at 0.6 (at 0.86 with no effect)
+    beyond = beyond_tolerance(ctx, nominal_sim, ctx.held) + [s for s in pinned if s in affected]
     unexplained = "unexplained_mismatch" if beyond else "no_missing_physics"
     if not acc:
         return unexplained, None, [], 0.0, results

@@ -19,6 +19,9 @@ def test_a_house2_rig_recording_gets_a_verdict_on_house2s_own_terms(tmp_path):
     assert rep["verdict"] in ("no_missing_physics", "missing_physics", "unexplained_mismatch")
     assert rep["locate"]["replay"]["plant"] == "house2_cut_circuit"
     assert rep["locate"]["replay"]["boundaries"]["mixer.T_return"] == "mixer.T_ret"
+    # the station and the floor, found by role, replayed alone between their measured interfaces
+    assert rep["locate"]["replay"]["mixing_station_alone"] and rep["locate"]["replay"]["emitter_alone"]
+    assert set(rep["emitter_calibration"]["values"]) == {"floor.Q_nominal"}
     words = {m["mode"] for m in rep["locate"]["modes"]}
     assert any("heat pump on" in w for w in words) and not any("CHP" in w for w in words)
     skipped = {c["id"]: c.get("reason", "") for c in rep["candidates"] if not c.get("fitted")}
@@ -70,4 +73,30 @@ def test_a_heat_pump_that_lost_capacity_is_named_and_sized_on_house2(tmp_path):
     # against the house file: the nominal re-fit may take up to 10 % of a capacity within the
     # unit's tolerance (P_heat_nom +-10 %), the candidate the rest
     assert abs(rep["size"]["factor_of_file"] / f - 1.0) < 0.10, (rep["size"], rep["nominal_refit"]["parameters"])
+    assert rep["affected_heldout_rmse_after"] <= 0.5 * rep["affected_heldout_rmse_before"]
+
+
+def test_a_floor_whose_screed_stores_less_is_named_and_sized_on_house2(tmp_path):
+    """The twin's own two days of house 2 with the floor's screed x 0.4 (a line of a house file):
+    behind the circuit cut the floor is replayed alone on the measured circuit and room, and the
+    candidate bound to the floor-heating kind names it within 15 % against the return sensor's
+    lag and delay."""
+    from plant.diagnose.effects import catalogue
+
+    f = 0.4
+    house = load_house("house2", start="2021-01-12", overrides={"floor.C_screed": f * 2.7e7})
+    t, rows = house.run(2 * 86400.0, dt=1.0, out_interval=60.0)
+    roles = roles_of("house2")
+    keep = list(roles.commands) + ["heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow", "heating.T_sup",
+                                   "mixer.m_flow", "mixer.T_sup", "mixer.T_ret", "zone.T_room", "dhw.m_flow_hot"]
+    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
+    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
+    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house="house2")
+    rec = recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house="house2")
+    ids = ("slab_capacity", "sensor_lag", "transport_delay")
+    # the twin's own plant: nothing for the nominal re-fit to take up
+    rep = diagnose(rec, house="house2", log=lambda *a: None, plots=False, jobs=1, refit_nominal=False,
+                   effects=[e for e in catalogue("house2") if e.id in ids])
+    assert rep["effect"] == "slab_capacity" and rep["component"] == "floor", (rep["verdict"], rep["effect"])
+    assert abs(rep["size"]["factor_of_file"] / f - 1.0) < 0.15, rep["size"]
     assert rep["affected_heldout_rmse_after"] <= 0.5 * rep["affected_heldout_rmse_before"]

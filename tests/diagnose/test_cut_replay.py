@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from plant.diagnose import cut, locate, replay, requirements
+from plant.diagnose import cut, emitter, locate, replay, requirements
 from plant.truth import synth
 from plant.diagnose import calibration, pipe_sensor
 from plant.diagnose.context import Context
@@ -178,10 +178,10 @@ def test_a_radiator_chain_of_any_length_gives_its_rating_at_the_nominal_point():
     m = Q_N / (cp * 15.0)
     t = np.arange(0.0, 6 * 3600.0 + 1, 60.0)
     for N in (1, 3, 5):
-        k = cut._element_coefficient(Q_N, 60.0, 45.0, 21.0, 1.3, N)
+        k = emitter._element_coefficient(Q_N, 60.0, 45.0, 21.0, 1.3, N)
         x = np.full(N, 30.0)
         out = np.empty(t.size)
-        cut._radiator_run(t, np.full(t.size, m), np.full(t.size, 60.0), np.full(t.size, 21.0), x, k, 1.3,
+        emitter._radiator_run(t, np.full(t.size, m), np.full(t.size, 60.0), np.full(t.size, 21.0), x, k, 1.3,
                           cp * 1000.0 * 0.12 / N, out)
         assert abs(out[-1] - 45.0) < 0.01, (N, out[-1])
         assert abs(m * cp * (60.0 - out[-1]) / Q_N - 1.0) < 1e-3
@@ -192,10 +192,10 @@ def test_a_radiator_chain_of_any_length_gives_its_rating_at_the_nominal_point():
 def test_the_radiator_alone_calibration_finds_elements_rating_and_water():
     rec = synth.make("none", days=1.5, signals=CIRCUIT, noise=False)
     truth = {"radiator.Q_nominal": 7000.0, "radiator.V_water": 0.12}
-    rec.data["mixer.T_ret"] = cut.replay_radiator(rec, "house1", truth, len(rec.time), 3)["mixer.T_ret"] \
+    rec.data["mixer.T_ret"] = emitter.replay(rec, "house1", truth, len(rec.time), 3)["mixer.T_ret"] \
         + np.random.default_rng(1).normal(0.0, 0.05, len(rec.time))
     flow = rec.data["mixer.m_flow"] > 1e-3
-    cal = cut.calibrate_radiator(rec, "house1", flow & (rec.time < rec.time[0] + 86400.0))
+    cal = emitter.calibrate(rec, "house1", flow & (rec.time < rec.time[0] + 86400.0))
     assert cal["elements"] == 3 and cal["rms_K"] < 0.06
     assert abs(cal["values"]["radiator.Q_nominal"] / 7000.0 - 1.0) < 0.02
     assert abs(cal["values"]["radiator.V_water"] / 0.12 - 1.0) < 0.05
@@ -221,11 +221,11 @@ def test_a_circuit_that_never_flows_in_training_keeps_the_file_values_and_says_w
     rec = synth.make("none", days=0.5, signals=CIRCUIT, noise=False)
     rec.data["mixer.m_flow"] = np.zeros(len(rec.time))
     rp = replay.Replayer(rec)
-    assert rp.circuit and rp.radiator
+    assert rp.circuit and rp.emitter
     train = rec.time < rec.time[0] + 0.2 * 86400.0
-    for cal in (rp.calibrate_radiator(train), rp.calibrate_mixer(train)):
+    for cal in (rp.calibrate_emitter(train), rp.calibrate_mixer(train)):
         assert cal["calibrated"] is False and "flows at 0 recorded samples" in cal["why"], cal
-    assert not rp.base and not rp.calibrated and rp.radiator_elements == 5
+    assert not rp.base and not rp.calibrated and rp.emitter_elements == 5
     assert sum("not calibrated" in n for n in rp.notes) == 2
 
 

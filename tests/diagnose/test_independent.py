@@ -38,7 +38,7 @@ def labsim(tmp_path_factory):
 def test_the_independent_lab_with_no_effect_is_not_blamed(labsim):
     meta, rep = labsim("no_effect")
     assert rep["verdict"] == "no_missing_physics" and rep["effect"] is None, rep["finding"]
-    assert rep["radiator_calibration"]["rms_K"] < 0.3          # the radiator alone, calibrated
+    assert rep["emitter_calibration"]["rms_K"] < 0.3          # the radiator alone, calibrated
     assert 600.0 < rep["pipe_sensors"]["chp.m_flow"]["tau_s"] < 3000.0  # labsim's pipes: 1,200 s
     assert abs(rep["pipe_sensors"]["chp.m_flow"]["T_plant_room_degC"] - 20.0) < 0.5  # ... toward 20 degC
     assert rep["nominal_refit"]["storage_scheme"]["chosen"].startswith("upwind")

@@ -15,12 +15,12 @@ quiet = lambda *a: None  # noqa: E731
 def test_stages_return_new_values_and_leave_their_inputs_as_they_were():
     rec = synth.make("none", days=1.0, signals=CIRCUIT, seed=3)
     p = pipeline.prepare(rec, "house1", train_days=0.5, require_cut=False)
-    assert p.replayer.circuit and p.replayer.radiator and p.replayer.t_train == p.ctx.t_split
+    assert p.replayer.circuit and p.replayer.emitter and p.replayer.t_train == p.ctx.t_split
     ok0, base0 = p.ctx.ok.copy(), dict(p.replayer.base)
     b = pipeline.calibrate(p, "house1", refit_nominal=False, log=quiet)
     # the calibrations came back as a new replayer and a new context; the prepared ones are as they were
     assert b.replayer is not p.replayer and p.replayer.base == base0 and not p.replayer.calibrated
-    assert b.replayer.calibrated == {"radiator"} and set(b.radiator["values"]) <= set(b.replayer.base)
+    assert b.replayer.calibrated == {"radiator"} and set(b.emitter["values"]) <= set(b.replayer.base)
     assert p.ctx.nominal is None and np.array_equal(p.ctx.ok, ok0)
     assert b.ctx.nominal is b.nominal and np.array_equal(b.ctx.nominal_sim, b.nominal.rows[:, b.ctx.cols])
     # a replay is a value: the same replayer gives the same rows, and its reading fits come with it
@@ -38,4 +38,4 @@ def test_stages_return_new_values_and_leave_their_inputs_as_they_were():
     with pytest.raises(dataclasses.FrozenInstanceError):
         sel.results[0].reason = "changed"
     rep = pipeline.build_report(b, loc, sel, "house1")
-    assert rep["verdict"] == sel.verdict and rep["radiator_calibration"] is b.radiator
+    assert rep["verdict"] == sel.verdict and rep["emitter_calibration"] is b.emitter
