@@ -34,7 +34,6 @@ class Knob:
     rel: float = 0.0             # bounds: the file value x (1 -+ rel) ...
     bounds: tuple | None = None  # ... or absolute (a file value of 0: the ideal)
     rank: int = 0                # the order of the re-fit's coordinate descent over the house's knobs
-    also: tuple = ()             # further keys that take the same value (a pair of headers)
     joint: bool = True           # re-fitted again with each simulate candidate
     signals: tuple = ()          # calibrated first on these outputs alone ("link.*": that storage's sensors)
 

@@ -31,12 +31,11 @@ class NominalParam:
     unit: str
     why: str
     bounds: tuple | None = None  # absolute bounds instead (a file value of 0: the ideal)
-    also: tuple = ()             # further override keys that take the same value (a pair of headers)
     joint: bool = True           # re-fitted again with each simulate candidate (fit.JOINT_REFIT)
     signals: tuple = ()          # calibrated first, on these signals alone (a part with its own sensors)
 
     def overrides(self, value: float) -> dict:
-        return {k: float(value) for k in (self.key, *self.also)}
+        return {self.key: float(value)}
 
 
 def knobs(house: str) -> tuple:
@@ -54,8 +53,8 @@ def knobs(house: str) -> tuple:
             key = _named(inst, k.key)
             if key in found:
                 continue
-            q = NominalParam(key, k.rel, k.unit, k.why, k.bounds, tuple(_named(inst, a) for a in k.also),
-                             k.joint, tuple(s for local in k.signals for s in _outputs(spec, inst, local)))
+            q = NominalParam(key, k.rel, k.unit, k.why, k.bounds, k.joint,
+                             tuple(s for local in k.signals for s in _outputs(spec, inst, local)))
             found[key] = (k.rank, n, q)
     return tuple(q for _, _, q in sorted(found.values(), key=lambda v: v[:2]))
 
@@ -189,15 +188,10 @@ def _added(before, after) -> dict:
     return {k: v for k, v in after.base.items() if k not in before.base or before.base[k] != v}
 
 
-def ranges(nref, refit) -> dict:
-    """override key -> (lo, hi): the values the nominal re-fit could take (a pair of headers: both
-    keys), from refit_nominal's report entry."""
-    also = {q.key: q.also for q in refit}
-    out = {}
-    for row in nref.get("parameters", []):
-        for k in (row["name"], *also.get(row["name"], ())):
-            out[k] = (float(row["bounds"][0]), float(row["bounds"][1]))
-    return out
+def ranges(nref) -> dict:
+    """override key -> (lo, hi): the values the nominal re-fit could take, from refit_nominal's
+    report entry."""
+    return {row["name"]: (float(row["bounds"][0]), float(row["bounds"][1])) for row in nref.get("parameters", [])}
 
 
 def file_scheme(replayer) -> dict:

@@ -109,7 +109,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     if refit_nominal:
         nref = calibration.refit_nominal(ctx, rp, house, jobs=jobs)
         rp = rp.with_calibration(nref["overrides"])
-        ranges = calibration.ranges(nref, calibration.knobs(house))
+        ranges = calibration.ranges(nref)
         nominal = rp.run()
         sim_file = first.rows[:, ctx.cols]
         nref = {**nref, "train_cost_file": ctx.cost(sim_file, ctx.train),

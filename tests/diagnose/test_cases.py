@@ -237,7 +237,7 @@ def test_a_candidate_within_the_nominal_refit_range_is_a_calibration_not_missing
     nref = {"parameters": [{"name": "storage.UA_loss", "bounds": [17.0, 23.0]},
                            {"name": "supply_header.UA_loss", "bounds": [0.0, 3.0]},
                            {"name": "return_header.UA_loss", "bounds": [0.0, 3.0]}]}
-    ranges = calibration.ranges(nref, calibration.knobs("house1"))
+    ranges = calibration.ranges(nref)
     assert ranges == {"storage.UA_loss": (17.0, 23.0), "supply_header.UA_loss": (0.0, 3.0),
                       "return_header.UA_loss": (0.0, 3.0)}
     ctx = SimpleNamespace(nominal_ranges=ranges)

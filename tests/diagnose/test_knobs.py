@@ -7,26 +7,26 @@ from plant.diagnose.requirements import lines, requirements
 from plant.diagnose.roles import of as roles_of
 
 # house 1's re-fitted nominals as the diagnosis had them written by hand before the kinds
-# declared them (key, relative tolerance, absolute bounds, keys taking the same value, re-fitted
-# with each candidate, calibrated first on): the coordinate descents are order-sensitive, so the
+# declared them (key, relative tolerance, absolute bounds, re-fitted with each
+# candidate, calibrated first on): the coordinate descents are order-sensitive, so the
 # order is part of it. Since then each header is calibrated on its own sensor (it had one value
 # for both, calibrated on the two sensors together)
 HOUSE1 = [
-    ("storage.UA_loss", 0.40, None, (), True, ()),
-    ("radiator.Q_nominal", 0.10, None, (), True, ()),
-    ("zone.H_direct", 0.10, None, (), True, ()),
-    ("switch.storage_inlet_mixing", 0.0, (0.0, 0.05), (), True, ()),
-    ("supply_header.V", 0.0, (0.005, 0.05), (), False, ("switch.T_sup",)),
-    ("return_header.V", 0.0, (0.005, 0.05), (), False, ("switch.T_ret",)),
-    ("supply_header.UA_loss", 0.0, (0.0, 3.0), (), False, ("switch.T_sup",)),
-    ("return_header.UA_loss", 0.0, (0.0, 3.0), (), False, ("switch.T_ret",)),
-    ("chp.V_water", 0.0, (0.0025, 0.03), (), False, ("chp.T_sup",)),
-    ("dhw_pump.UA", 0.25, None, (), False, tuple(f"dhw_storage.T_sensor_{k}" for k in range(1, 11))),
+    ("storage.UA_loss", 0.40, None, True, ()),
+    ("radiator.Q_nominal", 0.10, None, True, ()),
+    ("zone.H_direct", 0.10, None, True, ()),
+    ("switch.storage_inlet_mixing", 0.0, (0.0, 0.05), True, ()),
+    ("supply_header.V", 0.0, (0.005, 0.05), False, ("switch.T_sup",)),
+    ("return_header.V", 0.0, (0.005, 0.05), False, ("switch.T_ret",)),
+    ("supply_header.UA_loss", 0.0, (0.0, 3.0), False, ("switch.T_sup",)),
+    ("return_header.UA_loss", 0.0, (0.0, 3.0), False, ("switch.T_ret",)),
+    ("chp.V_water", 0.0, (0.0025, 0.03), False, ("chp.T_sup",)),
+    ("dhw_pump.UA", 0.25, None, False, tuple(f"dhw_storage.T_sensor_{k}" for k in range(1, 11))),
 ]
 
 
 def test_house1_knobs_are_the_ones_written_by_hand_before_in_their_order():
-    got = [(q.key, q.rel, q.bounds, q.also, q.joint, q.signals) for q in calibration.knobs("house1")]
+    got = [(q.key, q.rel, q.bounds, q.joint, q.signals) for q in calibration.knobs("house1")]
     assert got == HOUSE1
     assert all(q.why for q in calibration.knobs("house1"))
 
