@@ -113,7 +113,11 @@ class BenchServer:
         The device's tick runs after the plant lock is released: the server thread takes the
         device's lock, then the plant's (Device.read_registers reads port.t and the signals), so
         ticking inside the plant lock took them the other way round and could deadlock the bench
-        (its server stopped answering and accepting, and it did not stop on SIGTERM)."""
+        (its server stopped answering and accepting, and it did not stop on SIGTERM).
+
+        It sleeps until the next model step is due: nothing changes before then (the watchdog
+        counts the model's time too). Waking every 10 ms instead cost fifteen idle benches 8.6 %
+        of a core in 1,500 wake-ups a second, each taking the GIL from the bench's server thread."""
         wall0, h = time.monotonic(), self.model.h
         while not self._stop.is_set():
             target = (time.monotonic() - wall0) * self.speed
@@ -122,7 +126,7 @@ class BenchServer:
                     self.model.step(h)
                 t = self.model.t
             self.device.tick(t)
-            self._stop.wait(min(0.01, max(h / self.speed, 0.0005)))
+            self._stop.wait(max(wall0 + (t + h) / self.speed - time.monotonic(), 0.0005))
 
     def summary(self) -> dict[str, Any]:
         with self.port_lock.lock:
