@@ -23,6 +23,8 @@ EXAMPLES = """examples:
   twin can-hub --port 29536 &          # one CAN bus for several processes (socketcand)
   twin bench brine --canopen socketcand:127.0.0.1:29536 --speed 200 &
   twin phil house3 --bench brine=canopen:socketcand:127.0.0.1:29536 --typeday 1 --hours 1 --speed 200 --step 2   # by PDO
+  twin phil house2 --bench space_heating=127.0.0.1:5041 --speed 1 --phase 0.2 &   # several houses at once, each
+  twin phil house3 --bench space_heating=127.0.0.1:5042 --speed 1 --phase 0.4 &   # stepping at its own phase
   twin phil compare runs/sf1          # set vs measured per interface, and the house simulated alone
   twin phil lint                       # check every bench map (phil/maps/)
   twin phil table space_heating --format md    # a bench map's register table (csv or md), CANopen objects and PDOs
@@ -52,6 +54,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "measurement the PLC has not rewritten counts as silent")
     p.add_argument("--pdo-age", type=float, default=2.0, help="CANopen benches: s (wall) after which a "
                    "measurement whose TPDO has not come again counts as silent")
+    p.add_argument("--phase", type=float, metavar="S", help="step at S s (wall) after every whole cycle "
+                   "(--step / --speed) of the system clock, e.g. 0.2 at 1 s cycles: every whole second + 0.2 s; "
+                   "houses run at once with phases of their own do not all exchange at the same instant "
+                   "(default: the first step one cycle after the start)")
     p.add_argument("--warmup", type=float, default=600.0, help="warm-up [s simulated], not counted")
     p.add_argument("--record", help="run directory: signals.csv, events.csv, meta.json, report.json")
     p.add_argument("--stale", type=float, help="s (wall) without a good value before a measurement "
@@ -116,6 +122,10 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError("twin phil eds: give the bench map, e.g. twin phil eds brine --out brine.eds")
         export_eds(canopen_map(load_bench_map(args.bench_map)).dmap, args.out or sys.stdout)
         return 0
+    cycle = args.step / args.speed
+    if args.phase is not None and not 0.0 <= args.phase < cycle:
+        raise ConfigError(f"twin phil --phase {args.phase:g}: must be 0 <= S < {cycle:g} s, the cycle "
+                          f"(--step {args.step:g} / --speed {args.speed:g})")
     benches = dict(parse_bench(spec) for spec in args.bench)
     if not benches:
         raise ConfigError("twin phil: no --bench given; e.g. --bench space_heating=127.0.0.1:5031")
@@ -124,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
         stale_s=args.stale, stop_s=args.stop_after, timeout_s=args.timeout, retries=args.retries,
         stop_file=args.stop_file, warmup_s=args.warmup, start_h=args.start, served_age_s=args.served_age,
         pdo_age_s=args.pdo_age,
-        retry_s=args.retry_after, district=args.district, others=args.others))
+        retry_s=args.retry_after, district=args.district, others=args.others, phase_s=args.phase))
     for name, address in loop.served.items():
         print(f"serving bench {name} for its PLC on Modbus TCP {address} (unit "
               f"{loop.channels[name].map.dmap.unit_id})", flush=True)

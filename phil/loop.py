@@ -19,6 +19,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from gateway.clock import PacedClock
 from gateway.transports.can_bus import parse_bus_spec
 from phil.benchmap import BenchMap, load_bench_map
@@ -76,6 +78,18 @@ class PhilOptions:
                                       # (the house at its node there, phil/grid.py)
     others: str = "all"               # the grid bench: "all" the district's other houses simulated on
                                       # the grid, "none" only the PHIL house draws
+    phase_s: float | None = None      # wall s after each whole cycle of the system clock at which the
+                                      # steps start (a lab house on its own clock); None: one cycle
+                                      # after the run starts (gateway/clock.py PacedClock)
+
+
+def kept_phase(phases: Any, around: float, cycle: float) -> float | None:
+    """Median phase [s] of the steps in the cycle, taken around `around` so that steps just
+    either side of the cycle's start (phase 0) do not average to half a cycle."""
+    if not len(phases):
+        return None
+    offset = (np.asarray(phases) - around + cycle / 2) % cycle - cycle / 2
+    return float((around + np.median(offset)) % cycle)
 
 
 def house_file(house: str) -> str:
@@ -165,7 +179,7 @@ class PhilLoop:
         self.columns = self._columns()
         self.recorder = Recorder(options.record, self.columns, {
             "house": house, "kind": "phil", "speed": options.speed, "dt": options.dt,
-            "typeday": options.typeday, "start_h": options.start_h,
+            "typeday": options.typeday, "start_h": options.start_h, "phase_s": options.phase_s,
             "benches": {n: str(a) for n, a in self.addresses.items()}, "served": self.served,
             **({"district": options.district, "others": options.others}
                if any(ch.wiring.boundary for ch in self.channels.values()) else {}),
@@ -341,7 +355,7 @@ class PhilLoop:
         self._prerun()
         for ch in self.channels.values():
             ch.guard.restart(time.monotonic())
-        self.clock = PacedClock(self.o.speed, self.o.dt)
+        self.clock = PacedClock(self.o.speed, self.o.dt, self.o.phase_s)
         self.clock.bind(self.step)
         self.clock.start()
         while not self._done.wait(0.1):
@@ -356,6 +370,8 @@ class PhilLoop:
             ch.link.close()
         report = self.tally.report(self.house, self.stop_reason, self.clock.lateness())
         report["cycle_s"] = self.o.dt / self.o.speed
+        report["phase_s"] = {"set": self.o.phase_s, "kept_median": kept_phase(
+            self.clock.phases(), self.o.phase_s or 0.0, report["cycle_s"])}
         boundary = getattr(self.house, "boundary_report", None)     # the simulated grid's ledger
         if boundary:
             report.update(boundary())

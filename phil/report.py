@@ -266,5 +266,9 @@ def format_report(report: dict[str, Any]) -> str:
     lat = report["lateness_ms"]
     lines.append(f"  step lateness: median {lat['median']} ms, p99 {lat['p99']} ms; the twin's step "
                  f"(exchanges + house): median {report['step_ms']['median']} ms, p99 {report['step_ms']['p99']} ms")
+    phase = report.get("phase_s") or {}
+    if phase.get("set") is not None and phase.get("kept_median") is not None:
+        lines.append(f"  steps at {phase['kept_median']:.4f} s into each {report['cycle_s']:g} s cycle of the "
+                     f"system clock (--phase {phase['set']:g})")
     return "\n".join(lines)
 

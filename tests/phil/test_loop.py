@@ -209,3 +209,40 @@ def test_bench_reporting_l_per_h_where_the_map_says_l_per_min(tmp_path):
     assert inputs["m_flow_set"] == 0.0 and inputs["T_sup_set"] == 20.0      # safe set-points sent
     head, rows = _rows(tmp_path / "run")
     assert rows[-1][head.index("space_heating.SFW_HCRLbM_l_per_min.flag")] == "1" and len(rows[-1]) == len(head)
+
+
+@pytest.mark.realtime
+def test_houses_at_once_step_at_the_phase_each_was_given(tmp_path):
+    """`twin phil --phase S`: two houses, each a `twin phil` process against its own `twin bench`
+    process, step S s into every cycle of the system clock (a 0.25 s cycle: --step 1 at 4x),
+    each at its own phase, and report the phase they kept; a phase outside the cycle is refused."""
+    speed, phases = 4.0, (0.05, 0.175)
+    benches = [_bench_process(speed=speed) for _ in phases]
+    try:
+        twins = [subprocess.Popen([sys.executable, "-m", "cli.main", "phil", "house1",
+                                   f"--bench=space_heating=127.0.0.1:{port}", "--typeday", "1",
+                                   "--speed", str(speed), "--step", "1", "--warmup", "4", "--hours", str(12 / 3600),
+                                   "--phase", str(phase), "--record", str(tmp_path / f"run{i}")],
+                                  cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+                 for i, ((_, port), phase) in enumerate(zip(benches, phases))]
+        outs = [t.communicate(timeout=120)[0] for t in twins]
+        refused = subprocess.run([sys.executable, "-m", "cli.main", "phil", "house1",
+                                  f"--bench=space_heating=127.0.0.1:{benches[0][1]}", "--speed", str(speed),
+                                  "--phase", "0.25"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    finally:
+        _stop(*(p for p, _ in benches))
+    kept = []
+    for i, (twin, out, phase) in enumerate(zip(twins, outs, phases)):
+        assert twin.returncode == 0, out
+        report = json.loads((tmp_path / f"run{i}" / "report.json").read_text())
+        assert report["stop_reason"] == "end of run" and report["steps"] >= 12
+        assert report["benches"]["space_heating"]["exchange_ms"]["median"] is not None
+        assert report["phase_s"]["set"] == phase
+        kept.append(report["phase_s"]["kept_median"])
+        # the median step starts late by its lateness only (well under 1 ms on a quiet machine)
+        assert phase - 0.002 <= kept[-1] < phase + 0.02, (phase, kept[-1])
+        assert f"(--phase {phase:g})" in out
+        assert json.loads((tmp_path / f"run{i}" / "meta.json").read_text())["phase_s"] == phase
+    assert 0.1 < kept[1] - kept[0] < 0.15
+    assert refused.returncode != 0
+    assert "--phase 0.25: must be 0 <= S < 0.25 s" in refused.stdout + refused.stderr
