@@ -8,10 +8,13 @@ twin and compiled the houses (Twin, preload()), so that their start-up is not co
 10 minutes.
   1. Real time, 1 s steps, 2 minutes (type day 1 from midnight: no unpaced pre-run, every step
      exchanges with every bench whatever the house does): house 1 with its three benches
-     (space heating, tap water, solar), then 5 houses at once (15 bench processes): exchange
-     latency set-point-out to measurement-in per bench (one FC16 write + one FC4 read; median,
-     p99), step lateness of the twin's clock (median, p99), and the twin's share of the 1 s
-     cycle (exchanges + house step).
+     (space heating, tap water, solar), then 5 houses at once (15 bench processes, one bench
+     per process) with phases of their own (`twin phil --phase` 0, 0.2, ... 0.8 s, as houses on
+     their own clocks), then the same 5 houses aligned (all --phase 0: every house exchanges in
+     the same instant, the worst case; --aligned-seconds, default 60 s, so that the whole run
+     stays near 10 minutes): exchange latency set-point-out to measurement-in per bench (one
+     FC16 write + one FC4 read; median, p99), step lateness of the twin's clock (median, p99),
+     and the twin's share of the 1 s cycle (exchanges + house step).
      Comparison measured in the same run: the same exchange in a tight loop of a bare client
      (phil/master.py's BenchLink, no twin around it) against a bench process.
   2. SF1 closed loop, type day 1 (January; its middle day, 0-24 h) at --speed real time with
@@ -28,11 +31,12 @@ twin and compiled the houses (Twin, preload()), so that their start-up is not co
      the simulated side's over the same span (the bench's heat scaled to the twin's span by the
      PLC's clock: phil/report.py); the grid's differential pressure range at the node.
 Goals (issue #25): lateness p99 < 10 ms, exchange < 5 ms on loopback. Whole run < 10 min.
-Ends with RESULT phil_exchange_p99_ms=, phil_lateness_p99_ms= (and for --houses), phil_heat_error_pct=
+Ends with RESULT phil_exchange_p99_ms=, phil_lateness_p99_ms= (and for --houses, phased and
+aligned), phil_heat_error_pct=
 (space heating, over the same span; phil_heat_error_raw_pct= over the twin's span),
 phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (these two over the same span too) and
 phil_grid_dp_range_pa= (of the parts run).
-Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--speed 330] [--step 3]
+Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--aligned-seconds 60] [--speed 330] [--step 3]
      [--boundary-hours 0.5] [--boundary-speed 200] [--grid-others all|none]
      [--parts realtime,day,boundary]   (a short check: --parts boundary --boundary-hours 0.1)
 The machine's load average at the start and the end is printed with the wall times.
@@ -178,8 +182,10 @@ def bare_exchange(port: int, n: int = 300) -> np.ndarray:
     return np.array(out[20:])
 
 
-def realtime(houses: int, seconds: float, tmp: Path) -> dict:
-    """`houses` houses at once, each with its three benches, 1 s steps in real time."""
+def realtime(houses: int, seconds: float, tmp: Path, aligned: bool = False) -> dict:
+    """`houses` houses at once, each with its three benches, 1 s steps in real time: at phases
+    spread over the cycle (house i at i/houses s), or all at phase 0 (`aligned`); one house
+    steps one cycle after its start, as without --phase."""
     # all bench processes start at once (each prints its port when it serves)
     launched = [{n: launch_bench(n, 1.0) for n in BENCHES} for _ in range(houses)]
     benches = [{n: port_of(p) for n, p in b.items()} for b in launched]
@@ -187,15 +193,16 @@ def realtime(houses: int, seconds: float, tmp: Path) -> dict:
     warmup = 5
     try:
         bare = bare_exchange(benches[0]["space_heating"][1])
-        runs = [tmp / f"rt{houses}_{i}" for i in range(houses)]
+        runs = [tmp / f"rt{houses}{'a' if aligned else ''}_{i}" for i in range(houses)]
+        phases = [[] if houses == 1 else ["--phase", str(0.0 if aligned else i / houses)] for i in range(houses)]
         twins = [start_house({n: port for n, (_, port) in b.items()}, run, "--speed", "1", "--step", "1",
-                             "--hours", str(seconds / 3600.0), "--warmup", str(warmup), "--typeday", "1")
-                 for b, run in zip(benches, runs)]
+                             "--hours", str(seconds / 3600.0), "--warmup", str(warmup), "--typeday", "1", *phase)
+                 for b, run, phase in zip(benches, runs, phases)]
         for twin in twins:
             twin.communicate(timeout=seconds + 120)
     finally:
         stop(procs)
-    exchange, late, step, share = [], [], [], []
+    exchange, late, step, share, kept = [], [], [], [], []
     for run in runs:
         rows = counted_rows(run, warmup)
         exchange += [float(r[f"{n}.exchange_ms"]) for r in rows for n in BENCHES]
@@ -203,9 +210,11 @@ def realtime(houses: int, seconds: float, tmp: Path) -> dict:
         report = json.loads((run / "report.json").read_text())
         step.append(report["step_ms"]["median"])
         share.append(report["step_ms"]["median"] / (report["cycle_s"] * 1e3))
+        kept.append(report["phase_s"]["kept_median"])
     ex, lt = np.array(exchange), np.array(late)
     ex = ex[~np.isnan(ex)]          # NaN: a failed bench not tried again yet
-    return {"houses": houses, "exchanges": len(ex), "exchange_median_ms": float(np.median(ex)),
+    return {"houses": houses, "aligned": aligned, "phases_s": kept, "seconds": seconds,
+            "exchanges": len(ex), "exchange_median_ms": float(np.median(ex)),
             "exchange_p99_ms": float(np.percentile(ex, 99)), "lateness_median_ms": float(np.median(lt)),
             "lateness_p99_ms": float(np.percentile(lt, 99)), "step_median_ms": float(np.median(step)),
             "cycle_share_pct": 100.0 * float(np.median(share)), "bare_median_ms": float(np.median(bare)),
@@ -267,17 +276,23 @@ def boundary_loops(hours: float, speed: float, tmp: Path, others: str = "all") -
     return {name: json.loads((tmp / f"{name}_run" / "report.json").read_text()) for name in cases}
 
 
-def print_realtime(rt: list[dict], seconds: float) -> list[str]:
+def print_realtime(rt: list[dict]) -> list[str]:
     for r in rt:
-        print(f"real time, {r['houses']} house(s) x 3 benches, 1 s steps, {seconds:g} s: "
+        how = ("" if r["houses"] == 1 else ", all at phase 0 (aligned)" if r["aligned"] else
+               ", phases " + " / ".join(f"{p:.3f}" for p in r["phases_s"]) + " s")
+        print(f"real time, {r['houses']} house(s) x 3 benches (one bench per process){how}, 1 s steps, "
+              f"{r['seconds']:g} s: "
               f"exchange median {r['exchange_median_ms']:.2f} ms, p99 {r['exchange_p99_ms']:.2f} ms "
               f"({r['exchanges']} exchanges; bare client, same bench: median {r['bare_median_ms']:.2f} ms, "
               f"p99 {r['bare_p99_ms']:.2f} ms); lateness median {r['lateness_median_ms']:.2f} ms, "
               f"p99 {r['lateness_p99_ms']:.2f} ms; twin's step median {r['step_median_ms']:.2f} ms = "
               f"{r['cycle_share_pct']:.2f} % of the 1 s cycle", flush=True)
-    return [f"phil_exchange_p99_ms={rt[0]['exchange_p99_ms']:.3f}", f"phil_lateness_p99_ms={rt[0]['lateness_p99_ms']:.3f}",
-            f"phil_exchange_p99_ms_{rt[1]['houses']}_houses={rt[1]['exchange_p99_ms']:.3f}",
-            f"phil_lateness_p99_ms_{rt[1]['houses']}_houses={rt[1]['lateness_p99_ms']:.3f}"]
+    out = [f"phil_exchange_p99_ms={rt[0]['exchange_p99_ms']:.3f}", f"phil_lateness_p99_ms={rt[0]['lateness_p99_ms']:.3f}"]
+    for r in rt[1:]:
+        key = f"{r['houses']}_houses" + ("_aligned" if r["aligned"] else "")
+        out += [f"phil_exchange_p99_ms_{key}={r['exchange_p99_ms']:.3f}",
+                f"phil_lateness_p99_ms_{key}={r['lateness_p99_ms']:.3f}"]
+    return out
 
 
 def print_day(day: dict, speed: float, step: float) -> list[str]:
@@ -328,6 +343,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=120.0, help="real-time part: s per run")
     ap.add_argument("--houses", type=int, default=5, help="houses at once in the second real-time run")
+    ap.add_argument("--aligned-seconds", type=float, default=60.0, help="real-time part: s of the run with "
+                    "the houses all at phase 0 (0: not run)")
     ap.add_argument("--speed", type=float, default=330.0, help="closed loop: real time x SPEED")
     ap.add_argument("--step", type=float, default=3.0, help="closed loop: exchange step [s simulated]")
     ap.add_argument("--boundary-hours", type=float, default=0.5, help="brine and grid loops: counted hours")
@@ -350,7 +367,10 @@ def main() -> int:
             walls["real time, 1 house"] = time.perf_counter() - t_all - sum(walls.values())
             rt.append(realtime(a.houses, a.seconds, Path(tmp)))
             walls[f"real time, {a.houses} houses"] = time.perf_counter() - t_all - sum(walls.values())
-            results += print_realtime(rt, a.seconds)
+            if a.aligned_seconds > 0:
+                rt.append(realtime(a.houses, a.aligned_seconds, Path(tmp), aligned=True))
+                walls[f"real time, {a.houses} houses aligned"] = time.perf_counter() - t_all - sum(walls.values())
+            results += print_realtime(rt)
         if "day" in parts:
             day = closed_loop(a.speed, a.step, Path(tmp))
             walls["SF1 closed loop"] = time.perf_counter() - t_all - sum(walls.values())
