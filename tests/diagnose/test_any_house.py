@@ -49,6 +49,19 @@ def test_a_house_file_written_for_the_test_is_diagnosed_on_its_own_recording(tmp
     assert np.isfinite(rep["energy"]["boiler"]["error_before_pct"])
 
 
+def _house2_day(tmp_path, overrides: dict, days: float, signals: list):
+    """The twin's own `days` of house 2 from 12 January with `overrides`, recorded every minute:
+    the commands, the circuit, the draw, the storage sensors and `signals`."""
+    house = load_house("house2", start="2021-01-12", overrides=overrides)
+    t, rows = house.run(days * 86400.0, dt=1.0, out_interval=60.0)
+    keep = list(roles_of("house2").commands) + signals + ["mixer.m_flow", "mixer.T_sup", "mixer.T_ret",
+                                                          "dhw.m_flow_hot"]
+    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
+    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
+    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house="house2")
+    return recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house="house2")
+
+
 def test_a_heat_pump_that_lost_capacity_is_named_and_sized_on_house2(tmp_path):
     """The twin's own day of house 2 with the heat pump's heat and COP x 0.7 at the same pump
     flow (a line of a house file): the candidate bound to the heat-pump kind names it within 10 %,
@@ -57,15 +70,8 @@ def test_a_heat_pump_that_lost_capacity_is_named_and_sized_on_house2(tmp_path):
 
     f = 0.7
     ov = {"heat_pump.P_heat_nom": f * 5750.0, "heat_pump.COP_nom": f * 4.65, "heat_pump.dT": f * 5.0}
-    house = load_house("house2", start="2021-01-12", overrides=ov)
-    t, rows = house.run(86400.0, dt=1.0, out_interval=60.0)
-    roles = roles_of("house2")
-    keep = list(roles.commands) + ["heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow", "heat_pump.Q_flow",
-                                   "heat_pump.P_el", "mixer.m_flow", "mixer.T_sup", "mixer.T_ret", "dhw.m_flow_hot"]
-    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
-    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
-    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house="house2")
-    rec = recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house="house2")
+    rec = _house2_day(tmp_path, ov, 1.0, ["heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow",
+                                          "heat_pump.Q_flow", "heat_pump.P_el"])
     ids = ("heat_pump_capacity", "heat_pump_cop", "defrost_share", "heat_loss")
     rep = diagnose(rec, house="house2", log=lambda *a: None, plots=False, jobs=1,
                    effects=[e for e in catalogue("house2") if e.id in ids])
@@ -84,15 +90,8 @@ def test_a_floor_whose_screed_stores_less_is_named_and_sized_on_house2(tmp_path)
     from plant.diagnose.effects import catalogue
 
     f = 0.4
-    house = load_house("house2", start="2021-01-12", overrides={"floor.C_screed": f * 2.7e7})
-    t, rows = house.run(2 * 86400.0, dt=1.0, out_interval=60.0)
-    roles = roles_of("house2")
-    keep = list(roles.commands) + ["heat_pump.T_sup", "heat_pump.T_ret", "heat_pump.m_flow", "heating.T_sup",
-                                   "mixer.m_flow", "mixer.T_sup", "mixer.T_ret", "zone.T_room", "dhw.m_flow_hot"]
-    keep += [f"storage.T_sensor_{k}" for k in range(1, 11)]
-    data = {s: rows[:, house.catalogue.index(s)] for s in keep}
-    recording_io.write_csv(tmp_path / "rec.csv", t, data, tmp_path / "columns.toml", start="2021-01-12", house="house2")
-    rec = recording_io.load(tmp_path / "rec.csv", tmp_path / "columns.toml", house="house2")
+    rec = _house2_day(tmp_path, {"floor.C_screed": f * 2.7e7}, 2.0, ["heat_pump.T_sup", "heat_pump.T_ret",
+                                                                      "heat_pump.m_flow", "heating.T_sup", "zone.T_room"])
     ids = ("slab_capacity", "sensor_lag", "transport_delay")
     # the twin's own plant: nothing for the nominal re-fit to take up
     rep = diagnose(rec, house="house2", log=lambda *a: None, plots=False, jobs=1, refit_nominal=False,
