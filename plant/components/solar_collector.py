@@ -33,7 +33,10 @@ input `<name>.upper` (0/1) sets it. The house's rules write it (plant/controller
 heat_pump_rules.py, solar_upper: upper when T_collector - T_BT9 > 3 K, lower below 2 K); driven
 from outside, it is the controller's (the SiL's ST_A_V3_TL). The idle coil carries no flow and
 exchanges nothing; the collector return is the outlet of the coil in use, so the ledger closes
-as with one coil. Signals Q_flow_upper and E_heat_upper give the upper coil's share.
+as with one coil. A valve that does not close (`leak`, 0 ... 0.5) sends that share of the flow
+through the other coil and the return is both outlets mixed by their flows (leak = 0 gives the
+closing valve's numbers bit for bit). Signals Q_flow_upper and E_heat_upper give the upper
+coil's share (below zero where its leak flow takes heat from the top of the tank).
 
 Control (the lab's solar pump, §12.1): the pump switches on when T_collector - T_storage >
 dT_on and off when it falls below dT_off (held in between), T_storage being a storage sensor
@@ -62,6 +65,7 @@ Parameters (SI)
 | UA | W/K | coil conductance, the lower coil's with two (house 1: 1.8 m2 x 675 W/(m2 K) = 1215 W/K) |
 | UA_upper | W/K | the upper coil's conductance with two coils (house 3: 1.9 m2 x 675 = 1282.5 W/K); 0 with one |
 | T_init | degC | initial collector temperature |
+| leak | 1 | share of the loop's flow through the coil the valve is not set to (two coils; 0: it closes) |
 
 Assumptions: no stagnation or boiling model (the node's temperature follows the curve however
 high); no pipe losses or delay between collector and storage; the coil fluid holds no heat
@@ -112,6 +116,8 @@ class Params:
     UA: float = param(1215.0, "W/K", "conductance of the coil in the storage", 0.0, 1e6)
     T_init: float = param(20.0, "degC", "initial collector temperature", -30.0, 100.0)
     UA_upper: float = param(0.0, "W/K", "conductance of the upper coil behind the solar valve (0: one coil)", 0.0, 1e6)
+    leak: float = param(0.0, "1", "share of the loop's flow through the coil the solar valve is not set to (two "
+                                  "coils; 0: the valve closes)", 0.0, 0.5)
 
 
 STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
@@ -248,7 +254,7 @@ class Kind(ComponentKind):
                f"{c.module(__name__)}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
                f"{x}[{X.E_heat}] += {Q} * h",
                f"{x}[{X.E_solar}] += ({beam} + {dif}) * {p}[{P.area}] * h")
-        self._emit_signals(c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side)
+        self._emit_signals(c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side, k_up, T_sup)
 
     def _emit_control(self, c, inst, x, p, T_st):
         """The pump's inputs, written by the built-in control unless driven from outside."""
@@ -288,18 +294,23 @@ class Kind(ComponentKind):
             return None, f"{a('coil_Tout')}[{k}]"
         up = c.signal(inst, "upper", "1", "input", "solar three-way valve: 1 = upper coil, 0 = lower coil "
                                                      "(the rules write it unless driven from outside)")
-        side = c.var("upper")
+        side, leak = c.var("upper"), f"{p}[{P.leak}]"
+        # a valve that does not close sends the share `leak` through the other coil; written so that
+        # leak = 0 gives the closing valve's numbers bit for bit (m - m * 0.0 == m)
         c.emit("hydraulics",
                f"{side} = {up} > 0.5",
-               f"{a('coil_m')}[{k}] = 0.0 if {side} else {m}",
-               f"{a('coil_m')}[{k_up}] = {m} if {side} else 0.0",
+               f"{a('coil_m')}[{k}] = {m} * {leak} if {side} else {m} - {m} * {leak}",
+               f"{a('coil_m')}[{k_up}] = {m} - {m} * {leak} if {side} else {m} * {leak}",
                f"{a('coil_Tin')}[{k}] = {T_sup}",
                f"{a('coil_Tin')}[{k_up}] = {T_sup}",
                f"{a('coil_UA')}[{k}] = {p}[{P.UA}]",
                f"{a('coil_UA')}[{k_up}] = {p}[{P.UA_upper}]")
-        return side, f"({a('coil_Tout')}[{k_up}] if {side} else {a('coil_Tout')}[{k}])"
+        sel = f"({a('coil_Tout')}[{k_up}] if {side} else {a('coil_Tout')}[{k}])"
+        other = f"({a('coil_Tout')}[{k}] if {side} else {a('coil_Tout')}[{k_up}])"
+        # the return is the two coils' outlets mixed by their flows
+        return side, f"({sel} + {leak} * ({other} - {sel}))"
 
-    def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side):
+    def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side, k_up, T_sup):
         """Output signals and ledger entries; with the valve, the upper coil's own heat."""
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
@@ -316,11 +327,14 @@ class Kind(ComponentKind):
                f"{c.ledger_entry(inst, 'heat')} += {S} * h",
                f"{c.ledger_entry(inst, 'loss')} += {Q_loss} * h")
         if side is not None:
+            a = c.storage_ports(inst.options["storage"]).array
+            q_up = c.var("Q_upper")
             e_up = c.state(inst, np.zeros(1), suffix="_valve")
-            c.emit("volumes", f"{e_up}[0] += {Q} * h if {side} else 0.0")
+            c.emit("volumes", f"{q_up} = {a('coil_m')}[{k_up}] * CP * ({T_sup} - {a('coil_Tout')}[{k_up}]) "
+                              f"if {a('coil_m')}[{k_up}] > 0.0 else 0.0",
+                   f"{e_up}[0] += {q_up} * h")
             c.emit("signals",
-                   f"{sig('Q_flow_upper', 'W', 'heat given by the upper coil (0 while the valve is lower)')} = "
-                   f"{Q} if {side} else 0.0",
+                   f"{sig('Q_flow_upper', 'W', 'heat given by the upper coil (0 while it carries no flow)')} = {q_up}",
                    f"{sig('E_heat_upper', 'J', 'heat given by the upper coil since the start')} = {e_up}[0]")
 
     def _check_coils(self, c, inst, valve):

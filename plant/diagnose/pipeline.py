@@ -71,13 +71,14 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
     warnings = list(rec.warnings) + requirements.check(rec, house)
     rp = replay.Replayer(rec, house, require_cut=require_cut)
     simulated = rp.simulated
-    for unit, runs in rp.roles.unfollowed(rec.data).items():
-        # its command is still replayed (its heat is as recorded, near none); its own signals
-        # follow what the replay cannot: not compared, and said so
+    for unit, runs in rp.unfollowed.items():
+        # the twin's own control runs it (Replayer); its signals, sampled between pulses, are not
+        # compared, and said so
         simulated = {s for s in simulated if s.split(".", 1)[0] != unit}
         warnings.append(f"{unit}: its recorded command runs {runs} times, each one sample long: it switches "
-                        f"faster than the recording's scan, which a replay cannot follow; its signals are "
-                        f"not compared (record its command or flow faster, or as a run-time count)")
+                        f"faster than the recording's scan, which a replay cannot follow; the twin's own "
+                        f"control runs it and its signals are not compared (record its command or flow "
+                        f"faster, or as a run-time count)")
     ctx = Context.build(rec, train_days=train_days, simulated=simulated, roles=rp.roles)
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
 

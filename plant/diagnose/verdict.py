@@ -80,6 +80,8 @@ def _judged(r, ctx, n_eff, b0, nominal_held):
     elif r.at_bound:
         reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {', '.join(r.at_bound)} ended on a bound of "
                   "its range: the candidate absorbs a mismatch it cannot represent; rejected")
+    elif imitated := r.effect.tolerated(r.theta, ctx):
+        reason = f"held-out gain {r.held_gain * 100:.1f} %, but {imitated}; rejected"
     elif inside := within_calibration(r, ctx):
         reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {inside}: a value the "
                   "nominal re-fit may take itself, a calibration rather than missing physics; rejected")

@@ -130,6 +130,30 @@ def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_run
     assert r.unfollowed({}) == {}
 
 
+def test_a_pulsing_loop_runs_on_the_twins_own_control_and_a_running_one_on_its_recording(tmp_path):
+    """A replay holding a pulsing command between samples would run the loop for whole scans;
+    the twin's own control runs it instead (its other commands are replayed as before)."""
+    import numpy as np
+
+    from plant.diagnose import recording_io
+    from plant.diagnose.replay import Replayer
+
+    r = roles_of("house2")
+    t = np.arange(600) * 60.0
+    for name, on, replayed in (("pulses", [50, 120, 200, 333], False), ("runs", slice(50, 80), True)):
+        data = {c: np.zeros(t.size) for c in r.commands}
+        data["solar.on"] = np.zeros(t.size)
+        data["solar.on"][on] = 1.0
+        data["solar.m_flow_set"] = 10.0 * data["solar.on"]
+        d = tmp_path / name
+        d.mkdir()
+        recording_io.write_csv(d / "rec.csv", t, data, d / "columns.toml", start="2021-04-20", house="house2")
+        rp = Replayer(recording_io.load(d / "rec.csv", d / "columns.toml", house="house2"), "house2")
+        assert set(r.commands) <= set(rp.commands)
+        assert ({"solar.on", "solar.m_flow_set"} <= set(rp.commands)) is replayed, (name, rp.commands)
+        assert rp.unfollowed == ({} if replayed else {"solar": 4})
+
+
 def test_the_storage_plume_candidate_stays_within_half_of_each_houses_tank():
     from types import SimpleNamespace
 

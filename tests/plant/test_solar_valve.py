@@ -93,6 +93,39 @@ def test_heat_goes_into_the_layers_of_the_coil_in_use(summer_morning):
     assert np.abs(d[outside]).sum() < 1e-2 * (Q_up + Q_lo)
 
 
+def test_a_leaking_valve_heats_through_both_coils(tmp_path):
+    """The valve set to the upper coil with a quarter of the flow through the lower one (leak =
+    0.25): both coils' layers take heat from a 90 degC collector, the upper coil gives less than
+    the whole, the storage takes what the loop gives, and the ledger closes over a summer day."""
+    leaky = tmp_path / "leaky.toml"
+    leaky.write_text('[house]\nname = "leaky"\nbase = "house3"\n\n[solar]\nleak = 0.25\n')
+    house = load_house(leaky, start="2021-07-20")
+    st = house.decl.instances["storage"].params
+    C_layer = RHO * CP * st.volume / st.n_layers
+    house.run(12 * 3600, dt=10.0, out_interval=3600.0)
+    house.set_state("storage", np.linspace(70.0, 20.0, st.n_layers))
+    collector = house.state("solar").copy()
+    collector[sc.X.T] = collector[sc.X.T_ret] = 90.0
+    house.set_state("solar", collector)
+    for name, value in (("solar.on", 1.0), ("solar.m_flow_set", 0.333), ("solar.upper", 1.0)):
+        house.set(name, value)
+    x0 = house.state("storage").copy()
+    house.step(1.0)
+    d = C_layer * (house.state("storage") - x0)
+    Q, Q_up = house.get("solar.Q_flow"), house.get("solar.Q_flow_upper")
+    layer = lambda height: st.n_layers - 1 - min(int(height / st.height * st.n_layers), st.n_layers - 1)  # noqa: E731
+    upper = slice(layer(1.564), layer(1.196) + 1)
+    lower = slice(layer(0.828), layer(0.092) + 1)
+    assert d[upper].sum() > 0.0 and d[lower].sum() > 0.0
+    assert 0.0 < Q_up < Q
+    assert d[lower].sum() == pytest.approx(Q - Q_up, rel=2e-2)
+    day = load_house(leaky, start="2021-07-20")
+    day.run(86400, dt=10.0, out_interval=3600.0)
+    # the leak through the upper coil while the valve is lower cools the top of the tank: the
+    # upper coil's heat may end below zero, the loop's is positive
+    assert day.ledger()["closure"] < 1e-9 and day.get("solar.E_heat_upper") < day.get("solar.E_heat") > 0.0
+
+
 def test_ledger_closes_over_two_summer_days():
     house = load_house("house3", start="2021-07-20")
     _, rows = house.run(2 * 86400, dt=10.0, out_interval=3600.0)

@@ -77,6 +77,12 @@ class Effect:
         then why, in words. Default: never."""
         return ""
 
+    def tolerated(self, theta, ctx) -> str:
+        """kind "simulate": '' unless the fitted effect is no larger than what a difference of
+        every real plant that the twin does not carry imitates (a valve's travel); then why, in
+        words. Default: never."""
+        return ""
+
     def fitted(self, ctx) -> list[int]:
         """Indices of the parameters the recording can identify (the others stay at their
         nominal value); default: all. Counted as the candidate's k in the BIC."""
