@@ -178,3 +178,30 @@ def test_a_user_candidate_bound_to_a_kind_the_project_lacks_is_refused_with_the_
     with pytest.raises(ConfigError, match=r"KINDS names 'heat_pump_ari', which is no kind .*did you mean heat_pump_air"):
         register(Typo)
     assert "my_heat_pump_effect" not in REGISTRY
+
+
+def test_a_valve_leak_within_what_the_valves_travel_passes_is_not_named():
+    """TRAVEL_S / 2 of leak-equivalent flow per switch-over while the unit is commanded on, as a
+    share of the time it passes water (a heat pump's start-up passes none)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from plant.diagnose.effects import catalogue
+    from plant.diagnose.effects.hydraulic import TRAVEL_S
+
+    t = np.arange(1000) * 60.0
+    on = np.zeros(t.size)
+    on[100:700] = 1.0
+    flow = np.where(on > 0.5, 0.5, 0.0)
+    flow[100:110] = 0.0                        # start-up: commanded, no water
+    upper = np.zeros(t.size)
+    for k in range(10):                        # ten switch-overs to upper and back while on
+        upper[120 + 50 * k: 140 + 50 * k] = 1.0
+    rec = SimpleNamespace(time=t, data={"heat_pump.on": on, "heat_pump.m_flow": flow, "hp_branch.upper": upper},
+                          has=lambda s: s in ("heat_pump.on", "heat_pump.m_flow", "hp_branch.upper"))
+    ctx = SimpleNamespace(rec=rec, roles=roles_of("house3"))
+    e = next(x for x in catalogue("house3") if x.id == "port_valve_leakage")
+    share = TRAVEL_S / 2 * 20 / (590 * 60.0)
+    assert "20 switch-overs" in e.tolerated([0.99 * share], ctx)
+    assert e.tolerated([1.01 * share], ctx) == ""
