@@ -115,14 +115,16 @@ def _alone(r, ctx) -> dict | None:
 def _judged_local(r, n_eff):
     """A sensor candidate on an array sensor (or a plant candidate on a subsystem replayed alone,
     _alone): accepted when the sensor's held-out residual relative to its neighbours is a
-    mismatch (above its limit, Context.limit, as locate.mismatched_signals) and the effect removes
+    mismatch (above its limit, Context.limit, as locate.mismatched_signals; or, for an effect
+    with a SHAPED_GAIN, within it where the effect removes that share) and the effect removes
     >= LOCAL_GAIN of it, with a better BIC on that residual and its parameter inside its range."""
     d = r.local
     b0 = bic(d["heldout_rms_before"] ** 2, n_eff, 0)
     r = dataclasses.replace(r, held_gain=d["gain"], bic=bic(d["heldout_rms_after"] ** 2, n_eff, r.k))
     what = d.get("what") or f"{r.signal} relative to {', '.join(d['neighbours'])}"
     accepted = False
-    if d["heldout_rms_before"] <= d["limit"]:
+    shaped = r.effect.SHAPED_GAIN is not None and d["gain"] >= r.effect.SHAPED_GAIN
+    if d["heldout_rms_before"] <= d["limit"] and not shaped:
         reason = (f"{what}: held-out RMS {d['heldout_rms_before']:.3g} within {d['limit']:.3g}: "
                   "no sensor-own mismatch; rejected")
     elif d.get("unlike"):

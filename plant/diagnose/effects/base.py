@@ -77,6 +77,10 @@ class Effect:
         then why, in words. Default: never."""
         return ""
 
+    # kind "signal": the share of its sensor's held-out residual it must remove to count as the
+    # sensor's own within the sensor's mismatch limit (None: only beyond it)
+    SHAPED_GAIN: float | None = None
+
     def tolerated(self, theta, ctx) -> str:
         """kind "simulate": '' unless the fitted effect is no larger than what a difference of
         every real plant that the twin does not carry imitates (a valve's travel); then why, in

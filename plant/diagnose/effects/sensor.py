@@ -41,6 +41,13 @@ class SensorLag(Effect):
     kind = "signal"
     params = (Param("tau", 1.0, 3600.0, 0.0, "s", log=True),)
     description = "first-order lag of a temperature sensor (immersion sleeve, thermal contact)"
+    # a lag leaves the rate of change times its time constant: small where the tank changes
+    # slowly, whatever the lag. One that removes this share of its sensor's held-out residual
+    # relative to its neighbours is the sensor's own even within the sensor's mismatch limit
+    # (verdict._judged_local). Chosen on rigsim house 2: sensor_lag_bt9 (600 s) removes 60 % of
+    # a 0.57 K residual (limit 0.62 K); on null_a no storage sensor's lag removes more than 35 %
+    # (at its 3600 s bound; 26 % off it), on house 3's June null 5 %.
+    SHAPED_GAIN = 0.5
 
     def apply(self, t, y, theta):
         return first_order(t, y, float(theta[0]))
