@@ -63,3 +63,25 @@ def test_an_offset_that_is_not_constant_is_rejected_with_that_reason():
     r = fit.fit_signal(OFFSET, ctx, sim)
     assert r.local["unlike"] == "" and r.theta[0] == pytest.approx(2.0, abs=1e-6)
     assert verdict._judged_local(r, n_eff=100.0).accepted
+
+
+@pytest.mark.parametrize("gain, accepted", [(0.60, True), (0.40, False)])
+def test_a_lag_within_its_sensors_limit_counts_where_it_removes_half_of_the_residual(gain, accepted):
+    """A lag's residual is the rate of change times its time constant: small where the tank
+    changes slowly. Within the sensor's limit it is the sensor's own only where it removes
+    SHAPED_GAIN of the residual; an offset within the limit never is."""
+    from plant.diagnose.effects.sensor import SensorLag
+
+    lag = next(e for e in catalogue("house2") if e.id == "sensor_lag")
+    before = 0.57
+    local = {"heldout_rms_before": before, "heldout_rms_after": before * (1 - gain) ** 0.5, "gain": gain,
+             "limit": 0.62, "neighbours": ["storage.T_sensor_8", "storage.T_sensor_10"]}
+    r = fit.Result("sensor_lag", "sensor", "signal", True, theta=[600.0], signal="storage.T_sensor_9",
+                   effect=lag, local=local)
+    got = verdict._judged_local(r, n_eff=100.0)
+    assert SensorLag.SHAPED_GAIN == 0.5 and got.accepted is accepted, got.reason
+    if not accepted:
+        assert "no sensor-own mismatch" in got.reason
+    off = verdict._judged_local(fit.Result("sensor_offset", "sensor", "signal", True, theta=[0.5],
+                                           signal="storage.T_sensor_9", effect=OFFSET, local=local), n_eff=100.0)
+    assert not off.accepted and "no sensor-own mismatch" in off.reason
