@@ -27,14 +27,34 @@ ROOT = Path(__file__).resolve().parents[2]
 SPEED = 150.0
 
 
-def _bench_process(*extra: str, speed: float = SPEED, name: str = "space_heating") -> tuple[subprocess.Popen, int]:
-    proc = subprocess.Popen([sys.executable, "-m", "cli.main", "bench", name,
+def _bench_popen(*extra: str, speed: float = SPEED, name: str = "space_heating") -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "cli.main", "bench", name,
                              "--modbus-tcp", "127.0.0.1:0", "--speed", str(speed), *extra],
                             cwd=ROOT, stdout=subprocess.PIPE, text=True)
+
+
+def _bench_port(proc: subprocess.Popen) -> tuple[subprocess.Popen, int]:
     line = proc.stdout.readline()
     port = re.search(r"127\.0\.0\.1:(\d+)", line)
     assert port, line
     return proc, int(port.group(1))
+
+
+def _bench_process(*extra: str, speed: float = SPEED, name: str = "space_heating") -> tuple[subprocess.Popen, int]:
+    return _bench_port(_bench_popen(*extra, speed=speed, name=name))
+
+
+def _bench_processes(**benches: dict) -> dict[str, tuple[subprocess.Popen, int]]:
+    """Bench processes started side by side (each takes ~2.5 s to import and listen), by the
+    name the loop gives it: {name: {"name": ..., "speed": ..., "extra": (...)}}."""
+    procs = {key: _bench_popen(*kw.get("extra", ()), speed=kw.get("speed", SPEED), name=kw.get("name", key))
+             for key, kw in benches.items()}
+    try:
+        return {key: _bench_port(proc) for key, proc in procs.items()}
+    except BaseException:
+        for proc in procs.values():
+            proc.kill()
+        raise
 
 
 def _stop(*procs: subprocess.Popen) -> list[str]:
@@ -51,7 +71,7 @@ def test_sf1_space_heating_dhw_and_solar_agree_with_the_benches(tmp_path):
     simulated heat over the same steps (phil/report.py): the radiator circuit's m_meas cp
     (T_sup_meas - T_return_model), the demand's energy at the measured cold water, the
     collector's heat with the measured return and flow."""
-    benches = {name: _bench_process(name=name) for name in ("space_heating", "tap_water", "solar")}
+    benches = _bench_processes(space_heating={}, tap_water={}, solar={})
     try:
         loop = PhilLoop("house1", {n: ("127.0.0.1", port) for n, (_, port) in benches.items()},
                         PhilOptions(speed=SPEED, dt=2.0, hours=1.0, typeday=4, start_h=32.0, warmup_s=300.0,
@@ -217,18 +237,22 @@ def test_houses_at_once_step_at_the_phase_each_was_given(tmp_path):
     process, step S s into every cycle of the system clock (a 0.25 s cycle: --step 1 at 4x),
     each at its own phase, and report the phase they kept; a phase outside the cycle is refused."""
     speed, phases = 4.0, (0.05, 0.175)
-    benches = [_bench_process(speed=speed) for _ in phases]
+    benches = list(_bench_processes(**{f"b{i}": {"name": "space_heating", "speed": speed}
+                                       for i in range(len(phases))}).values())
     try:
+        # refused before it connects or paces anything: it starts beside the twins, not after them
+        refusal = subprocess.Popen([sys.executable, "-m", "cli.main", "phil", "house1",
+                                    f"--bench=space_heating=127.0.0.1:{benches[0][1]}", "--speed", str(speed),
+                                    "--phase", "0.25"], cwd=ROOT, stdout=subprocess.PIPE,
+                                   stderr=subprocess.PIPE, text=True)
         twins = [subprocess.Popen([sys.executable, "-m", "cli.main", "phil", "house1",
                                    f"--bench=space_heating=127.0.0.1:{port}", "--typeday", "1",
                                    "--speed", str(speed), "--step", "1", "--warmup", "4", "--hours", str(12 / 3600),
                                    "--phase", str(phase), "--record", str(tmp_path / f"run{i}")],
                                   cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
                  for i, ((_, port), phase) in enumerate(zip(benches, phases))]
+        refused = "".join(refusal.communicate(timeout=60))
         outs = [t.communicate(timeout=120)[0] for t in twins]
-        refused = subprocess.run([sys.executable, "-m", "cli.main", "phil", "house1",
-                                  f"--bench=space_heating=127.0.0.1:{benches[0][1]}", "--speed", str(speed),
-                                  "--phase", "0.25"], cwd=ROOT, capture_output=True, text=True, timeout=60)
     finally:
         _stop(*(p for p, _ in benches))
     kept = []
@@ -244,5 +268,5 @@ def test_houses_at_once_step_at_the_phase_each_was_given(tmp_path):
         assert f"(--phase {phase:g})" in out
         assert json.loads((tmp_path / f"run{i}" / "meta.json").read_text())["phase_s"] == phase
     assert 0.1 < kept[1] - kept[0] < 0.15
-    assert refused.returncode != 0
-    assert "--phase 0.25: must be 0 <= S < 0.25 s" in refused.stdout + refused.stderr
+    assert refusal.returncode != 0
+    assert "--phase 0.25: must be 0 <= S < 0.25 s" in refused

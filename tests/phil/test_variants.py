@@ -20,7 +20,7 @@ from phil.report import format_report
 from phil.wiring import WIRINGS
 from plant.errors import ConfigError
 from plant.house import load_house
-from tests.phil.test_loop import SPEED, _bench_process, _rows, _stop
+from tests.phil.test_loop import SPEED, _bench_processes, _rows, _stop
 
 ROOT = Path(__file__).resolve().parents[2]
 #: what each variant keeps of the lab's interfaces (reference §13.2): the benches it is wired for
@@ -101,9 +101,7 @@ def test_sf2_closed_loop_heat_agrees_with_its_benches(tmp_path):
     collector's first sun. Heat of each bench's meter against the simulated side's over the same
     span (phil/report.py). 150x real time at 2 s steps, as tests/phil/test_loop.py (at 200x on a
     loaded machine the twin fell 45 s behind the benches' clocks in 24 min)."""
-    benches = {"space_heating": _bench_process(name="space_heating_floor", speed=SPEED),
-               "tap_water": _bench_process(name="tap_water", speed=SPEED),
-               "solar": _bench_process(name="solar", speed=SPEED)}
+    benches = _bench_processes(space_heating={"name": "space_heating_floor"}, tap_water={}, solar={})
     try:
         loop = PhilLoop("SF2", {n: ("127.0.0.1", port) for n, (_, port) in benches.items()},
                         PhilOptions(speed=SPEED, dt=2.0, hours=0.3, typeday=4, start_h=32.45, warmup_s=180.0,
