@@ -22,7 +22,7 @@ from phil.master import ExchangeError
 from phil.pdo_layout import canopen_map, pdo_layout
 from phil.report import format_report
 from plant.errors import DeviceMapError
-from tests.phil.faults import assert_rejected_and_stopped, events, rows
+from tests.phil.faults import FAULT_AFTER_S, assert_rejected_and_stopped, events, rows
 
 SDO_DOWNLOAD = 1      # client command specifier of an SDO download request (CiA 301)
 
@@ -168,7 +168,7 @@ def test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints(tmp
     loop = PhilLoop("house1", {"space_heating": parse_bench(f"space_heating=canopen:{bus}")[1]},
                     PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0, record=tmp_path / "run",
                                 pdo_age_s=0.3, stale_s=0.6, stop_s=1.5, timeout_s=0.1))
-    threading.Timer(1.5, server.device.set_link_fault, ("silent",)).start()
+    threading.Timer(FAULT_AFTER_S, server.device.set_link_fault, ("silent",)).start()
     try:
         report = loop.run()
         time.sleep(0.05)

@@ -18,7 +18,7 @@ from phil.emulator.server import BenchServer
 from phil.benchmap import load_bench_map
 from phil.loop import PhilLoop, PhilOptions
 from phil.report import format_report
-from tests.phil.faults import events as _events, rows as _rows, run_with_fault
+from tests.phil.faults import FAULT_AFTER_S, events as _events, rows as _rows, run_with_fault
 
 ROOT = Path(__file__).resolve().parents[2]
 # 150x real time at 2 s steps: 13 ms a step for the exchange and the model (median ~1 ms on a
@@ -145,7 +145,7 @@ def test_bad_bench_is_named_and_the_run_stops_with_safe_setpoints(tmp_path, faul
     server = BenchServer("space_heating", speed=100.0).start()
     # out of range: the scaled register of an open sensor serves 327.67 degC
     report, inputs = run_with_fault(server, _loop(server, tmp_path), "open" if fault == "out_of_range" else "fail",
-                                    "STM_HCRL_degC", after=1.5)
+                                    "STM_HCRL_degC")
     b = report["benches"]["space_heating"]
     assert "space_heating.STM_HCRL_degC" in report["stop_reason"]  or fault == "exception"
     events = _events(tmp_path / "run")
@@ -172,7 +172,7 @@ def test_stale_bench_process_stopped_then_killed(tmp_path):
                         PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, record=tmp_path / "run",
                                     warmup_s=20.0, stale_s=0.3, stop_s=1.5, timeout_s=0.1, retries=0))
         def stop_then_kill():
-            time.sleep(1.5)
+            time.sleep(FAULT_AFTER_S)
             os.kill(proc.pid, signal.SIGSTOP)      # the bench process hangs: requests time out
             time.sleep(0.6)
             proc.kill()                            # then it is gone: connection refused
@@ -196,7 +196,7 @@ def test_operator_stop_file(tmp_path):
     try:
         stop = tmp_path / "STOP"
         loop = _loop(server, tmp_path, stop_file=stop, stale_s=5.0, stop_s=10.0)
-        threading.Timer(1.0, stop.touch).start()
+        threading.Timer(FAULT_AFTER_S, stop.touch).start()
         report = loop.run()
         time.sleep(0.1)
         assert server.model.inputs["m_flow_set"] == 0.0

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from phil.loop import BenchAddress, PhilLoop, PhilOptions
+from tests.phil.faults import FAULT_AFTER_S
 
 ROOT = Path(__file__).resolve().parents[2]
 MBPOLL = shutil.which("mbpoll")
@@ -124,7 +125,7 @@ def test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served(tmp_path):
     host, _, port = loop.served["space_heating"].rpartition(":")
     plc = BenchPlc("space_heating", host, int(port), speed=100.0, period=0.01).start()
     _wait_written(loop, "space_heating")
-    threading.Timer(1.5, plc.stop).start()      # the PLC falls silent
+    threading.Timer(FAULT_AFTER_S, plc.stop).start()      # the PLC falls silent
     report = loop.run()
     assert "space_heating." in report["stop_reason"] and "no good value" in report["stop_reason"]
     events = list(csv.DictReader((tmp_path / "run" / "events.csv").open()))
