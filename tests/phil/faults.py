@@ -21,7 +21,9 @@ def rows(run: Path) -> tuple[list[str], list[list[str]]]:
 # wall seconds into a run at which a fault is injected: the loops of these tests warm up 20
 # simulated s at 100x (0.2 s of wall time), so the fault comes after ~20 counted steps with good
 # measurements (a good value to hold, a rejection the report counts); what follows the fault
-# (stale_s, stop_s) is timed from the fault, not from the start
+# (stale_s, stop_s) is timed from the fault, not from the start. stop_s needs only to follow
+# stale_s by enough steps (0.3 s: 15 steps at 100x) for the stale rejections to be recorded
+# before the stop
 FAULT_AFTER_S = 0.6
 
 

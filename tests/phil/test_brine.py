@@ -126,7 +126,7 @@ def test_bad_brine_measurement_is_named_and_the_run_stops_with_safe_setpoints(tm
     server = BenchServer("brine", speed=100.0).start()
     loop = PhilLoop("house3", {"brine": ("127.0.0.1", server.port)},
                     PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
-                                record=tmp_path / "run", stale_s=0.3, stop_s=1.0, timeout_s=0.1, retries=0))
+                                record=tmp_path / "run", stale_s=0.3, stop_s=0.6, timeout_s=0.1, retries=0))
     # stale: the PLC's server is gone (connection refused)
     action = {"nan": "open", "out_of_range": "drift", "stale": "stop"}[fault]
     report, inputs = run_with_fault(server, loop, action, "STM_BCVL_degC")

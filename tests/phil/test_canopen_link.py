@@ -167,7 +167,7 @@ def test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints(tmp
     server = BenchServer("space_heating", speed=100.0, can=bus).start()
     loop = PhilLoop("house1", {"space_heating": parse_bench(f"space_heating=canopen:{bus}")[1]},
                     PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0, record=tmp_path / "run",
-                                pdo_age_s=0.3, stale_s=0.6, stop_s=1.5, timeout_s=0.1))
+                                pdo_age_s=0.3, stale_s=0.6, stop_s=1.0, timeout_s=0.1))
     threading.Timer(FAULT_AFTER_S, server.device.set_link_fault, ("silent",)).start()
     try:
         report = loop.run()

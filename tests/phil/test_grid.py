@@ -194,7 +194,7 @@ def test_bad_grid_measurement_is_named_and_the_run_stops_with_safe_setpoints(tmp
     server = BenchServer("grid", speed=100.0).start()
     loop = PhilLoop("house1", {"grid": ("127.0.0.1", server.port)},
                     PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, warmup_s=20.0,
-                                record=tmp_path / "run", stale_s=0.3, stop_s=1.0))
+                                record=tmp_path / "run", stale_s=0.3, stop_s=0.6))
     # stale: exception 04 past stop_s (the loop gives up), then the PLC recovers
     action = {"nan": "open", "out_of_range": "drift", "stale": "fail"}[fault]
     report, inputs = run_with_fault(server, loop, action, "STM_TGRL_degC")

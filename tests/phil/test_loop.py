@@ -134,7 +134,7 @@ def test_bench_below_the_requested_flow_for_two_hours_deficit_reported_and_made_
 
 def _loop(server, tmp_path, **kw):
     opts = dict(speed=100.0, dt=2.0, hours=2.0, typeday=1, record=tmp_path / "run", warmup_s=20.0,
-                stale_s=0.3, stop_s=1.0)
+                stale_s=0.3, stop_s=0.6)
     opts.update(kw)
     return PhilLoop("house1", {"space_heating": ("127.0.0.1", server.port)}, PhilOptions(**opts))
 
@@ -216,7 +216,7 @@ def test_bench_reporting_l_per_h_where_the_map_says_l_per_min(tmp_path):
         text.replace(old, 'unit = "l/h", range = [0.0, 2400.0], direction = "from_bench", signal = "m_flow"'))
     server = BenchServer("space_heating", speed=100.0, bench_map=load_bench_map(tmp_path / "space_heating.toml")).start()
     try:
-        loop = _loop(server, tmp_path, stale_s=0.5, stop_s=2.0, start_h=24.0, hours=0.5)
+        loop = _loop(server, tmp_path, stale_s=0.5, stop_s=1.0, start_h=24.0, hours=0.5)
         report = loop.run()
         time.sleep(0.1)
         inputs = dict(server.model.inputs)

@@ -121,7 +121,7 @@ def test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served(tmp_path):
 
     loop = PhilLoop("house1", {"space_heating": BenchAddress("127.0.0.1", 0, serve=True)},
                     PhilOptions(speed=100.0, dt=2.0, hours=2.0, typeday=1, start_h=24.0, warmup_s=20.0,
-                                record=tmp_path / "run", served_age_s=0.3, stale_s=0.6, stop_s=1.5))
+                                record=tmp_path / "run", served_age_s=0.3, stale_s=0.6, stop_s=1.0))
     host, _, port = loop.served["space_heating"].rpartition(":")
     plc = BenchPlc("space_heating", host, int(port), speed=100.0, period=0.01).start()
     _wait_written(loop, "space_heating")
