@@ -58,13 +58,15 @@ def test_variant_has_the_signals_its_benches_use(house):
 def test_twin_phil_runs_the_variant(tmp_path, house, bench):
     """`twin phil HOUSE --bench ...`: a short run against the space-heating and tap-water benches
     (the floor heating's bench for SF2), recorded, ending with its report."""
-    servers = {"space_heating": BenchServer(bench, speed=200.0).start(),
-               "tap_water": BenchServer("tap_water", speed=200.0).start()}
+    # that the CLI runs the variant, records and reports is tested, not how closely the benches
+    # follow: 400x (5 ms a 2 s step; exchange median ~1 ms, p99 ~6 ms) as well as 200x
+    servers = {"space_heating": BenchServer(bench, speed=400.0).start(),
+               "tap_water": BenchServer("tap_water", speed=400.0).start()}
     try:
         out = subprocess.run([sys.executable, "-m", "cli.main", "phil", house,
                               *(f"--bench={n}=127.0.0.1:{s.port}" for n, s in servers.items()),
                               "--typeday", "1", "--start", "31", "--hours", "0.1", "--warmup", "60",
-                              "--speed", "200", "--step", "2", "--record", str(tmp_path / "run")],
+                              "--speed", "400", "--step", "2", "--record", str(tmp_path / "run")],
                              cwd=ROOT, capture_output=True, text=True, timeout=120)
     finally:
         for s in servers.values():
