@@ -125,28 +125,28 @@ def pytest_collection_modifyitems(config, items):
 
 
 # Seconds a real-time test takes (warm plant cache, the real-time tests one at a time on the
-# shared 2-core machine, #27: `-m realtime -n 0`, 257 s in all), by node id without parameters
+# shared 2-core machine, #27: `-m realtime -n 0`, 242 s in all), by node id without parameters
 # (a parametrised test: each case's); the others count REALTIME_DEFAULT_S. Only to share the
 # real-time tests between the workers' blocks so that they end together.
 REALTIME_SECONDS = {
     "tests/phil/test_loop.py::test_sf1_space_heating_dhw_and_solar_agree_with_the_benches": 31.0,
-    "tests/phil/test_loop.py::test_bench_below_the_requested_flow_for_two_hours_deficit_reported_and_made_up": 25.0,
-    "tests/phil/test_loop.py::test_houses_at_once_step_at_the_phase_each_was_given": 12.5,
+    "tests/phil/test_loop.py::test_bench_below_the_requested_flow_for_two_hours_deficit_reported_and_made_up": 25.5,
+    "tests/phil/test_loop.py::test_houses_at_once_step_at_the_phase_each_was_given": 11.5,
     "tests/phil/test_loop.py::test_stale_bench_process_stopped_then_killed": 3.3,
-    "tests/phil/test_loop.py::test_bench_reporting_l_per_h_where_the_map_says_l_per_min": 2.7,
+    "tests/phil/test_loop.py::test_bench_reporting_l_per_h_where_the_map_says_l_per_min": 1.7,
     "tests/phil/test_served.py::test_space_heating_bench_as_plc_process_polling_the_twin": 14.5,
-    "tests/phil/test_served.py::test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements": 10.5,
-    "tests/phil/test_served.py::test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served": 2.7,
-    "tests/phil/test_compare.py::test_compare_a_run_with_its_benches_and_the_house_alone": 11.0,
+    "tests/phil/test_served.py::test_mbpoll_as_the_tap_water_plc_reads_setpoints_and_writes_measurements": 10.0,
+    "tests/phil/test_served.py::test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served": 2.3,
+    "tests/phil/test_compare.py::test_compare_a_run_with_its_benches_and_the_house_alone": 9.0,
     "tests/phil/test_brine.py::test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector": 12.5,
     "tests/phil/test_canopen_link.py::test_sf3_closed_loop_over_canopen_brine_heat_agrees_with_the_ground_collector": 21.0,
-    "tests/phil/test_canopen_link.py::test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints": 2.7,
+    "tests/phil/test_canopen_link.py::test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints": 2.0,
     "tests/phil/test_grid.py::test_district_house_alone_on_its_grid_against_the_grid_emulator": 12.0,
     "tests/phil/test_grid.py::test_district_house_with_the_other_houses_against_the_grid_emulator": 12.5,
-    "tests/phil/test_variants.py::test_twin_phil_runs_the_variant": 5.5,
+    "tests/phil/test_variants.py::test_twin_phil_runs_the_variant": 4.5,
     "tests/phil/test_variants.py::test_sf2_closed_loop_heat_agrees_with_its_benches": 13.0,
     "tests/district/test_canopen_district.py::test_a_canopen_master_commands_a_substation_of_a_running_district": 11.5,
-    "tests/e2e/test_c_libmodbus_district.py::test_c_controller_runs_one_house_of_a_district": 18.5,
+    "tests/e2e/test_c_libmodbus_district.py::test_c_controller_runs_one_house_of_a_district": 17.5,
 }
 REALTIME_DEFAULT_S = 2.0
 
