@@ -248,8 +248,8 @@ class PortValveLeakage(UnitEffect):
 class SolarValveLeakage(PortValveLeakage):
     """A solar three-way valve that does not close (solar_collector.leak): a share of the loop's
     flow goes through the coil the valve is not set to, so the tank is heated at both coils'
-    heights and the loop returns a mix of both outlets. It can show only where the recorded valve
-    takes both positions and the loop runs."""
+    heights and the loop returns a mix of both outlets. It shows where the loop runs, in either
+    valve position (plausible)."""
     id = "solar_valve_leakage"
     KINDS = ("solar_collector",)
     params = (Param("leak", 0.0, 0.5, 0.0, "1 (share of the loop's flow through the coil not selected)"),)
