@@ -209,9 +209,10 @@ class PortValveLeakage(UnitEffect):
         valve runs from one port pair to the other (TRAVEL_S) the flow goes through both, about
         half each way, which the twin's valve, switching at once, does not. Over the recording
         that is a leak of TRAVEL_S / 2 per switch-over of the valve while its unit is commanded
-        on, as a share of the time the unit passes water (rigsim house 3's June null: 28 switch-overs in 10.5 h, 2.2 %, and a
-        1.6 % leak fitted with 22 % held-out gain)."""
-        (on, flows), up = self._runs(ctx), np.nan_to_num(np.asarray(ctx.rec.data[self.key("upper")], float)) > 0.5
+        on, as a share of the time the unit passes water (rigsim house 3's June null: 28
+        switch-overs in 10.5 h, 2.2 %, and a 1.6 % leak fitted with 22 % held-out gain)."""
+        on, flows = self._runs(ctx)
+        up = np.nan_to_num(np.asarray(ctx.rec.data[self.key("upper")], float)) > 0.5
         dt = float(np.median(np.diff(ctx.rec.time))) if ctx.rec.time.size > 1 else 0.0
         switches = int(np.count_nonzero((up[1:] != up[:-1]) & (on[1:] | on[:-1])))
         running = float(flows.sum()) * dt
