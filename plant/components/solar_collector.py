@@ -339,7 +339,7 @@ class Kind(ComponentKind):
 
     def _check_coils(self, c, inst, valve):
         """Each coil runs downward (inlet above outlet); two coils need UA_upper and the upper coil
-        above the lower one; UA_upper without a second coil is a mistake."""
+        above the lower one; UA_upper or a leak without a second coil is a mistake."""
         o = inst.options
         for side in ("upper", "lower") if valve else ("",):
             top, bottom = (f"{k}.{side}" if side else k for k in ("top", "bottom"))
@@ -355,6 +355,9 @@ class Kind(ComponentKind):
         if not valve and ua_up > 0.0:
             c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: only with two coils, top = {{ upper = ..., "
                               "lower = ... } and bottom = { upper = ..., lower = ... }")
+        if not valve and inst.params.leak > 0.0:
+            c.problems.append(f"{inst.at('leak')} = {inst.params.leak}: only a solar valve between two coils "
+                              "leaks; top = { upper = ..., lower = ... } and bottom = { upper = ..., lower = ... }")
         if valve and isinstance(o["top"], dict) and is_number(o["top"].get("upper")) and is_number(o["top"].get("lower")) \
                 and o["top"]["upper"] <= o["top"]["lower"]:
             c.problems.append(f"{inst.at('top')}.upper = {o['top']['upper']}: the upper coil's inlet must be above "

@@ -157,3 +157,11 @@ def test_one_coil_with_an_upper_conductance_is_rejected(tmp_path):
     with pytest.raises(ConfigError) as exc:
         load_house(bad)
     assert f"{bad}:8 [solar] UA_upper = 1282.5: only with two coils" in str(exc.value)
+
+
+def test_a_leak_without_a_second_coil_is_rejected(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[house]\nname = "bad"\nbase = "house2"\n\n[solar]\nleak = 0.2\n')
+    with pytest.raises(ConfigError) as exc:
+        load_house(bad)
+    assert f"{bad}:6 [solar] leak = 0.2: only a solar valve between two coils leaks" in str(exc.value)
