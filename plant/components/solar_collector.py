@@ -18,11 +18,16 @@ and azimuth). The incidence-angle modifier is ASHRAE's K_beam = 1 - b0 (1/cos th
 (0 ... 1); diffuse and ground-reflected light take the modifier at 60 deg, K_diffuse = 1 - b0.
 
 The node is advanced exactly over each step (the a2 term linearised about the start of the
-step): inlet at the last return temperature, mean outlet sent to the coil. The coil is a
+step): inlet at the last return temperature, mean outlet sent to the coil. The loop's pipes
+(`UA_loop`, half on the supply, half on the return) lose to the outdoor air on the way: water
+entering a pipe at T leaves it at T_air + (T - T_air) exp(-UA_loop / (2 m cp)) (the steady
+exchanger solution; the pipes hold no water, so they lose only while the pump runs). The supply
+and return signals are the coil's inlet and outlet, where a station at the storage measures
+them; T_collector is the collector's own. The coil is a
 storage coil (plant/components/storage.py's exact segment-wise exchanger); its outlet is the
 collector return. When the return comes back at another temperature than assumed, its
 enthalpy difference goes into the node at the step's end, so the ledger closes to round-off:
-    absorbed = heat to the storage + collector losses + change of collector heat.
+    absorbed = heat to the storage + collector and pipe losses + change of collector heat.
 Ledger: the irradiance on the aperture is `fuel`, the absorbed heat `heat` (optical losses are
 the difference), thermal losses `loss`; the node's heat C x T_collector is stored energy.
 
@@ -66,9 +71,11 @@ Parameters (SI)
 | UA_upper | W/K | the upper coil's conductance with two coils (house 3: 1.9 m2 x 675 = 1282.5 W/K); 0 with one |
 | T_init | degC | initial collector temperature |
 | leak | 1 | share of the loop's flow through the coil the valve is not set to (two coils; 0: it closes) |
+| UA_loop | W/K | the loop pipes' conductance to the outdoor air, supply and return together (0: none; 10 m of DN 20 with 20 mm insulation: about 2.5 W/K per line) |
 
 Assumptions: no stagnation or boiling model (the node's temperature follows the curve however
-high); no pipe losses or delay between collector and storage; the coil fluid holds no heat
+high); the loop pipes hold no water (no delay between collector and storage, no cooling of
+standing water between pump runs); the coil fluid holds no heat
 (as every storage coil here). The collector in §12.1 is a CPC tube collector; the curve model
 is the flat-plate one with its published coefficients (GreenCity's own model is not available,
 reference §0.4).
@@ -118,6 +125,8 @@ class Params:
     UA_upper: float = param(0.0, "W/K", "conductance of the upper coil behind the solar valve (0: one coil)", 0.0, 1e6)
     leak: float = param(0.0, "1", "share of the loop's flow through the coil the solar valve is not set to (two "
                                   "coils; 0: the valve closes)", 0.0, 0.5)
+    UA_loop: float = param(0.0, "W/K", "conductance of the loop's pipes to the outdoor air, supply and return "
+                                       "together (0: no pipe loss)", 0.0, 200.0)
 
 
 STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
@@ -162,13 +171,24 @@ def control(x, p, on, T_storage):
 
 
 @njit(cache=True)
+def line(T, T_air, m, UA):
+    """Outlet of a loop pipe of conductance UA to the outdoor air that water enters at T with flow
+    m (the steady exchanger solution: the pipe holds no heat). Written so that UA = 0 returns T bit
+    for bit."""
+    if m <= 0.0:
+        return T
+    return T - (T - T_air) * (-math.expm1(-UA / (m * CP)))
+
+
+@njit(cache=True)
 def advance(h, x, p, S, T_air, m):
     """Advance the collector node over h with the inlet at the last return temperature x[T_ret]
     (exact solution of the node's linear equation, a2 linearised about the step start).
 
-    Returns (T_sup, Q_loss): the mean outlet temperature over the step and the mean thermal loss
-    [W], the latter from the node's exact energy balance
-        C (T_end - T_start) = h (S - Q_loss - m cp (T_sup - T_in))."""
+    Returns (T_sup, Q_loss): the mean temperature at the coil inlet over the step (the collector's
+    outlet through the supply pipe) and the mean thermal loss [W] of the collector, from the node's
+    exact energy balance C (T_end - T_start) = h (S - Q_loss - m cp (T_out - T_in)), plus the supply
+    pipe's."""
     C = p[P.c_eff] * p[P.area]
     T0 = x[X.T]
     if m > 0.0:
@@ -190,20 +210,25 @@ def advance(h, x, p, S, T_air, m):
         T_mean = 0.5 * (T0 + T1)
     x[X.T] = T1
     Q_loss = S - m * CP * (T_mean - T_in) - C * (T1 - T0) / h if h > 0.0 else 0.0
-    x[X.T_sup] = T_mean if m > 0.0 else T1
-    return T_mean, Q_loss
+    T_coil = line(T_mean, T_air, m, 0.5 * p[P.UA_loop])
+    Q_loss += m * CP * (T_mean - T_coil)
+    x[X.T_sup] = T_coil if m > 0.0 else T1
+    return T_coil, Q_loss
 
 
 @njit(cache=True)
-def settle(h, x, p, m, T_ret, T_storage):
-    """The return came back from the coil at T_ret instead of the assumed inlet: its enthalpy
-    difference goes into the node. Without flow the return follows the storage sensor (what the
-    flow modulation compares with at the next start)."""
+def settle(h, x, p, m, T_ret, T_storage, T_air):
+    """The return came back from the coil at T_ret, through the return pipe, instead of the assumed
+    inlet: its enthalpy difference goes into the node. Without flow the return follows the storage
+    sensor (what the flow modulation compares with at the next start). Returns the return pipe's
+    loss [W]."""
     if m > 0.0:
-        x[X.T] += m * CP * h * (T_ret - x[X.T_ret]) / (p[P.c_eff] * p[P.area])
-        x[X.T_ret] = T_ret
-    else:
-        x[X.T_ret] = T_storage
+        T_in = line(T_ret, T_air, m, 0.5 * p[P.UA_loop])
+        x[X.T] += m * CP * h * (T_in - x[X.T_ret]) / (p[P.c_eff] * p[P.area])
+        x[X.T_ret] = T_in
+        return m * CP * (T_ret - T_in)
+    x[X.T_ret] = T_storage
+    return 0.0
 
 
 class Kind(ComponentKind):
@@ -246,15 +271,15 @@ class Kind(ComponentKind):
         T_st = c.s(o["sensor"]) if isinstance(o["sensor"], str) else "0.0"
         on, m_set = self._emit_control(c, inst, x, p, T_st)
         beam, dif, S, m, T_sup, Q_loss = self._emit_collector(c, x, p, shift, on, m_set)
-        Q, T_ret = c.var("Q_solar"), c.var("T_ret")
+        Q, T_ret, Q_pipe = c.var("Q_solar"), c.var("T_ret"), c.var("Q_pipe")
         side, coil_out = self._emit_coils(c, inst, st, k, k_up, p, m, T_sup)
         c.emit("volumes",
                f"{T_ret} = {coil_out} if {m} > 0.0 else {x}[{X.T_ret}]",
                f"{Q} = {m} * CP * ({T_sup} - {T_ret})",
-               f"{c.module(__name__)}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st})",
+               f"{Q_pipe} = {c.module(__name__)}.settle(h, {x}, {p}, {m}, {T_ret}, {T_st}, T_air)",
                f"{x}[{X.E_heat}] += {Q} * h",
                f"{x}[{X.E_solar}] += ({beam} + {dif}) * {p}[{P.area}] * h")
-        self._emit_signals(c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side, k_up, T_sup)
+        self._emit_signals(c, inst, x, p, beam, dif, S, m, T_ret, Q, (Q_loss, Q_pipe), side, k_up, T_sup)
 
     def _emit_control(self, c, inst, x, p, T_st):
         """The pump's inputs, written by the built-in control unless driven from outside."""
@@ -310,16 +335,18 @@ class Kind(ComponentKind):
         # the return is the two coils' outlets mixed by their flows
         return side, f"({sel} + {leak} * ({other} - {sel}))"
 
-    def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, Q_loss, side, k_up, T_sup):
-        """Output signals and ledger entries; with the valve, the upper coil's own heat."""
+    def _emit_signals(self, c, inst, x, p, beam, dif, S, m, T_ret, Q, losses, side, k_up, T_sup):
+        """Output signals and ledger entries; with the valve, the upper coil's own heat. losses: the
+        collector's and supply pipe's, the return pipe's."""
+        Q_loss = f"({losses[0]} + {losses[1]})"
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731
         c.emit("signals",
                f"{sig('T_collector', 'degC', 'collector (absorber node) temperature')} = {x}[{X.T}]",
-               f"{sig('T_sup', 'degC', 'collector outlet = coil inlet (mean over the step)')} = {x}[{X.T_sup}]",
-               f"{sig('T_ret', 'degC', 'coil outlet = collector inlet')} = {T_ret}",
+               f"{sig('T_sup', 'degC', 'coil inlet: the collector outlet through the supply pipe (mean over the step)')} = {x}[{X.T_sup}]",
+               f"{sig('T_ret', 'degC', 'coil outlet, led back to the collector by the return pipe')} = {T_ret}",
                f"{sig('m_flow', 'kg/s', 'solar circuit flow')} = {m}",
                f"{sig('Q_flow', 'W', 'heat given by the coil to the storage')} = {Q}",
-               f"{sig('Q_loss', 'W', 'collector heat loss to the outdoor air')} = {Q_loss}",
+               f"{sig('Q_loss', 'W', 'heat loss of the collector and its loop pipes to the outdoor air')} = {Q_loss}",
                f"{sig('G_plane', 'W/m2', 'irradiance on the collector plane (beam + diffuse + ground)')} = {beam} + {dif}",
                f"{sig('E_heat', 'J', 'heat given to the storage since the start')} = {x}[{X.E_heat}]",
                f"{sig('E_solar', 'J', 'irradiation on the aperture since the start')} = {x}[{X.E_solar}]",
