@@ -59,6 +59,13 @@ class Samples:
     def has(self, name: str) -> bool:
         return name in self.data
 
+    def on(self, name: str) -> np.ndarray:
+        """Samples at which a recorded command (0/1) is on: above one half, a missing sample off;
+        all off where the recording lacks it."""
+        if name not in self.data:
+            return np.zeros(self.time.size, bool)
+        return np.nan_to_num(np.asarray(self.data[name], float)) > 0.5
+
     def __len__(self) -> int:
         return len(self.time)
 

@@ -113,8 +113,7 @@ class Replayer:
         # the heat of whole scans it ran for seconds (rigsim house 3's June collector: x 0.32 for
         # 0.6 replayed, x 0.47 on its own control)
         self.unfollowed = self.roles.unfollowed(rec.data)
-        self.commands = [c for c in self.roles.replayed(rec) if c.split(".", 1)[0] not in removed
-                         and not (c in self.roles.own_commands and c.split(".", 1)[0] in self.unfollowed)]
+        self.commands = [c for c in self.roles.replayed(rec) if c.split(".", 1)[0] not in removed]
         bound = dict(self.cut.bindings) if self.cut else {}
         self.names = self.commands + list(bound)
         self.cmd = np.column_stack([rec.data[c] for c in self.commands] + [rec.data[s] for s in bound.values()])

@@ -123,9 +123,9 @@ class Roles:
         water cools the collector)."""
         out = {}
         for u in self.loops:
-            on = np.nan_to_num(np.asarray(data.get(u.command, ()), float)) > u.on_above
-            if on.size == 0:
+            if u.command not in data:
                 continue
+            on = u.runs(data)
             edges = np.flatnonzero(np.diff(np.concatenate(([0], on.astype(np.int8), [0]))))
             lengths = edges[1::2] - edges[::2]
             if lengths.size >= MIN_PULSES and np.median(lengths) <= 1:
@@ -134,8 +134,11 @@ class Roles:
 
     def replayed(self, rec) -> tuple:
         """The commands a replay drives from `rec`: its controllers' (all required) and the kinds'
-        own controls it recorded."""
-        return self.commands + tuple(c for c in self.own_commands if rec.has(c))
+        own controls it recorded, but for loops it cannot follow (unfollowed), whose own control
+        runs them."""
+        fast = self.unfollowed(rec.data)
+        return self.commands + tuple(c for c in self.own_commands
+                                     if rec.has(c) and c.split(".", 1)[0] not in fast)
 
     @property
     def ran(self) -> dict:

@@ -1,5 +1,6 @@
 """The diagnosis's calibration knobs and own commands come from the kinds (Knob, COMMANDS), never
 from a list of house 1's instance names."""
+import numpy as np
 import pytest
 
 from plant.diagnose import calibration
@@ -67,17 +68,21 @@ def test_a_brine_heat_pumps_brine_sensors_are_pipe_sensors_on_its_collectors_loo
 
 
 class _Rec:
-    def __init__(self, names):
-        self.names = set(names)
+    def __init__(self, names, on=(1.0, 1.0, 0.0, 0.0) * 50):
+        self.data = {n: np.asarray(on, float) for n in names}
 
     def has(self, s):
-        return s in self.names
+        return s in self.data
 
 
-def test_the_replay_drives_an_own_command_only_when_the_recording_has_it():
+def test_the_replay_drives_an_own_command_only_when_the_recording_has_it_and_can_follow_it():
     r = roles_of("house2")
     assert r.replayed(_Rec(r.commands)) == r.commands
     assert r.replayed(_Rec((*r.commands, "solar.on"))) == (*r.commands, "solar.on")
+    # a pump that runs one scan at a time switches faster than the recording: its own control runs it
+    pulsing = _Rec((*r.commands, "solar.on"), on=(1.0, 0.0) * 100)
+    assert r.unfollowed(pulsing.data) == {"solar": 100}
+    assert r.replayed(pulsing) == r.commands
 
 
 def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
@@ -86,7 +91,8 @@ def test_unit_candidates_are_bound_to_every_instance_of_their_kinds():
     units = lambda house: {(e.id, e.component) for e in catalogue(house) if getattr(e, "KINDS", ())}  # noqa: E731
     assert units("house2") == {("heat_pump_capacity", "heat_pump"), ("heat_pump_cop", "heat_pump"),
                                ("defrost_share", "heat_pump"), ("collector_degradation", "solar"),
-                               ("coil_fouling", "solar"), ("slab_capacity", "floor"), ("valve_leakage", "mixer"),
+                               ("coil_fouling", "solar"), ("collector_loop_loss", "solar"),
+                               ("slab_capacity", "floor"), ("valve_leakage", "mixer"),
                                ("heat_loss", "storage"), ("pipe_heat_loss", "supply_header"),
                                ("storage_mixing", "storage"), ("port_valve_leakage", "hp_valve")}
     # a ground-source unit has no defrost
@@ -189,6 +195,7 @@ def test_a_valve_leak_within_what_the_valves_travel_passes_is_not_named():
 
     from plant.diagnose.effects import catalogue
     from plant.diagnose.effects.hydraulic import TRAVEL_S
+    from plant.diagnose.recording_io import Samples
 
     t = np.arange(1000) * 60.0
     on = np.zeros(t.size)
@@ -198,10 +205,41 @@ def test_a_valve_leak_within_what_the_valves_travel_passes_is_not_named():
     upper = np.zeros(t.size)
     for k in range(10):                        # ten switch-overs to upper and back while on
         upper[120 + 50 * k: 140 + 50 * k] = 1.0
-    rec = SimpleNamespace(time=t, data={"heat_pump.on": on, "heat_pump.m_flow": flow, "hp_branch.upper": upper},
-                          has=lambda s: s in ("heat_pump.on", "heat_pump.m_flow", "hp_branch.upper"))
+    rec = Samples("test", "2021-06-01", t, {"heat_pump.on": on, "heat_pump.m_flow": flow, "hp_branch.upper": upper})
     ctx = SimpleNamespace(rec=rec, roles=roles_of("house3"))
     e = next(x for x in catalogue("house3") if x.id == "port_valve_leakage")
     share = TRAVEL_S / 2 * 20 / (590 * 60.0)
     assert "20 switch-overs" in e.tolerated([0.99 * share], ctx)
     assert e.tolerated([1.01 * share], ctx) == ""
+
+
+def test_a_candidate_replay_that_stops_a_running_unit_is_recognised():
+    """fit.stops_running: the replay's unit standing (its heat at or below the 500 W that says it
+    ran, Roles.ran) at more than unit_modes.MAX_SHARE of the samples the recording shows it
+    running, and at more than twice the nominal replay's share, is named; less is not."""
+    from types import SimpleNamespace
+
+    from plant.diagnose.fit import stops_running
+    from plant.diagnose.recording_io import Samples
+    from plant.diagnose.unit_modes import MAX_SHARE
+
+    r = roles_of("house3")
+    t = np.arange(1000) * 60.0
+    q = np.zeros(t.size)
+    q[100:600] = 3000.0                        # the recording's heat pump runs 500 samples
+    rec = Samples("test", "2021-01-20", t, {"heat_pump.Q_flow": q})
+    nominal = q.copy()
+    nominal[100:110] = 0.0                     # the nominal replay starts it 10 samples late
+    ctx = SimpleNamespace(roles=r, rec=rec, index=r.catalogue.index, measured=["heat_pump.Q_flow"],
+                          nominal_sim=nominal[:, None])
+    rows = np.zeros((t.size, len(r.catalogue.names)))
+    col = r.catalogue.index("heat_pump.Q_flow")
+    k = int(MAX_SHARE * 500)
+    rows[:, col] = q
+    rows[100:100 + k, col] = 0.0
+    assert stops_running(ctx, rows) == ""
+    rows[100:100 + k + 1, col] = 0.0
+    assert stops_running(ctx, rows) == ("heat_pump stands at 20 % of the samples where the recording has it running "
+                                        "(the nominal replay at 2 %)")
+    ctx.nominal_sim = rows[:, [col]].copy()    # no worse than the nominal replay: not named
+    assert stops_running(ctx, rows) == ""

@@ -199,7 +199,7 @@ class PortValveLeakage(UnitEffect):
         cmd = self.key("upper")
         if not ctx.rec.has(cmd):
             return False, f"the recording has no {cmd}: which port pair the valve was set to is unknown"
-        up = np.nan_to_num(np.asarray(ctx.rec.data[cmd], float)) > 0.5
+        up = ctx.rec.on(cmd)
         if min(up.mean(), 1.0 - up.mean()) < 0.02:
             return False, f"{cmd} (almost) never changes its position in the recording, so a leak cannot show"
         return True, ""
@@ -212,7 +212,7 @@ class PortValveLeakage(UnitEffect):
         on, as a share of the time the unit passes water (rigsim house 3's June null: 28
         switch-overs in 10.5 h, 2.2 %, and a 1.6 % leak fitted with 22 % held-out gain)."""
         on, flows = self._runs(ctx)
-        up = np.nan_to_num(np.asarray(ctx.rec.data[self.key("upper")], float)) > 0.5
+        up = ctx.rec.on(self.key("upper"))
         dt = float(np.median(np.diff(ctx.rec.time))) if ctx.rec.time.size > 1 else 0.0
         switches = int(np.count_nonzero((up[1:] != up[:-1]) & (on[1:] | on[:-1])))
         running = float(flows.sum()) * dt
@@ -268,14 +268,12 @@ class SolarValveLeakage(PortValveLeakage):
         cmd, on = self.key("upper"), self.key("on")
         if not ctx.rec.has(cmd):
             return False, f"the recording has no {cmd}: which coil the valve was set to is unknown"
-        if ctx.rec.has(on) and np.mean(np.nan_to_num(np.asarray(ctx.rec.data[on], float)) > 0.5) < 0.005:
+        if ctx.rec.has(on) and np.mean(ctx.rec.on(on)) < 0.005:
             return False, f"{on}: the loop's pump (almost) never runs in the recording"
         return True, ""
 
     def _runs(self, ctx) -> tuple:
-        on = self.key("on")
-        runs = (np.nan_to_num(np.asarray(ctx.rec.data[on], float)) > 0.5 if ctx.rec.has(on)
-                else np.zeros(ctx.rec.time.size, bool))
+        runs = ctx.rec.on(self.key("on"))
         return runs, runs
 
     def summary(self, theta, ctx, sim=None):

@@ -1,7 +1,10 @@
 """Candidates on units of any house, bound to their kinds (UnitEffect): a heat pump's capacity,
-COP and defrost share, a solar collector's optics and coil, a floor's slab, a ground collector. Each is a factor on a
-parameter the kind already carries, so it is a line of a house file too (`P_heat_nom = ...`)."""
+COP and defrost share, a solar collector's optics, coil and loop pipes, a floor's slab, a ground collector. Each
+is a factor on (or, for the loop pipes, an addition to) a parameter the kind already carries, so it is a line
+of a house file too (`P_heat_nom = ...`)."""
 from __future__ import annotations
+
+import numpy as np
 
 from .base import Param, UnitEffect, register
 
@@ -150,3 +153,30 @@ class CoilFouling(_Factor):
     WHAT = "solar coil heat transfer"
     params = (Param("factor", 0.1, 1.0, 1.0, "1", log=True),)
     description = "solar coil fouled (the collector's coil UA x factor)"
+
+
+@register
+class CollectorLoopLoss(UnitEffect):
+    """Solar loop pipes that lose more to the outdoor air than the file says (insulation wet,
+    torn or missing on a roof run): solar_collector.UA_loop from the file's value up. The loss
+    grows with the loop's temperature above the outdoor air and happens only while the pump runs;
+    a degraded collector instead absorbs less in proportion to the light."""
+    id = "collector_loop_loss"
+    KINDS = ("solar_collector",)
+    params = (Param("UA_W_per_K", 0.0, 40.0, 0.0, "W/K (loop pipes to the outdoor air, added to the file's)"),)
+    description = "solar loop pipes lose more heat to the outdoor air than the file says (UA_loop + UA)"
+
+    def plausible(self, ctx):
+        self._file = self.nominal(ctx, "UA_loop")
+        if ctx.rec.has(self.key("on")) and np.mean(ctx.rec.on(self.key("on"))) < 0.005:
+            return False, f"{self.key('on')}: the loop's pump (almost) never runs in the recording"
+        return True, ""
+
+    def overrides(self, theta):
+        return {self.key("UA_loop"): self._file + float(theta[0])}
+
+    def summary(self, theta, ctx, sim=None):
+        return f"{self.component}: loop pipes lose {theta[0]:.3g} W/K more to the outdoor air than the file's {self._file:.3g} W/K"
+
+    def size(self, theta, ctx, sim=None):
+        return {"UA_W_per_K": float(theta[0]), "UA_loop_W_per_K": self._file + float(theta[0])}
