@@ -19,15 +19,17 @@ and azimuth). The incidence-angle modifier is ASHRAE's K_beam = 1 - b0 (1/cos th
 
 The node is advanced exactly over each step (the a2 term linearised about the start of the
 step): inlet at the last return temperature, mean outlet sent to the coil. The loop's pipes
-(`UA_loop`, half on the supply, half on the return) lose to the outdoor air on the way: water
-entering a pipe at T leaves it at T_air + (T - T_air) exp(-UA_loop / (2 m cp)) (the steady
-exchanger solution; the pipes hold no water, so they lose only while the pump runs). The supply
-and return signals are the coil's inlet and outlet, where a station at the storage measures
-them; T_collector is the collector's own. The coil is a
+(`UA_loop`, `V_loop`, half on the supply, half on the return; plant/components/loop_pipe.py)
+lose to the outdoor air on the way: without water held (V_loop = 0) each is the steady
+exchanger, T_air + (T - T_air) exp(-UA_loop / (2 m cp)), losing only while the pump runs; with
+water each is a mixed node whose standing water cools between runs and reaches the coil first
+at the next. The supply and return signals are the coil's inlet and outlet, where a station at
+the storage measures them (standing: the supply pipe's water where it holds some, else the
+collector); T_collector is the collector's own. The coil is a
 storage coil (plant/components/storage.py's exact segment-wise exchanger); its outlet is the
 collector return. When the return comes back at another temperature than assumed, its
 enthalpy difference goes into the node at the step's end, so the ledger closes to round-off:
-    absorbed = heat to the storage + collector and pipe losses + change of collector heat.
+    absorbed = heat to the storage + collector and pipe losses + change of collector and pipe heat.
 Ledger: the irradiance on the aperture is `fuel`, the absorbed heat `heat` (optical losses are
 the difference), thermal losses `loss`; the node's heat C x T_collector is stored energy.
 
@@ -72,10 +74,11 @@ Parameters (SI)
 | T_init | degC | initial collector temperature |
 | leak | 1 | share of the loop's flow through the coil the valve is not set to (two coils; 0: it closes) |
 | UA_loop | W/K | the loop pipes' conductance to the outdoor air, supply and return together (0: none; 10 m of DN 20 with 20 mm insulation: about 2.5 W/K per line) |
+| V_loop | m3 | water in the loop's pipes, supply and return together (0: none held; 10 m of DN 20: 3.1 l per line) |
 
 Assumptions: no stagnation or boiling model (the node's temperature follows the curve however
-high); the loop pipes hold no water (no delay between collector and storage, no cooling of
-standing water between pump runs); the coil fluid holds no heat
+high); the loop pipes' water is one mixed node per line (no dead time; none with V_loop = 0);
+the coil fluid holds no heat
 (as every storage coil here). The collector in §12.1 is a CPC tube collector; the curve model
 is the flat-plate one with its published coefficients (GreenCity's own model is not available,
 reference §0.4).
@@ -95,9 +98,12 @@ import numpy as np
 from numba import njit
 
 from .. import sun
-from ..component import (REQUIRED, Instance, Kind as ComponentKind, SignalName, Valve, indices, is_number, link, pack,
+from . import loop_pipe, solar_coils
+from ..component import (REQUIRED, Instance, Kind as ComponentKind, SignalName, Valve, indices, link, pack,
                          param)
-from ..water import CP
+from ..water import CP, RHO
+
+RHO_CP = RHO * CP  # J/(m3 K) of the loop's water
 
 
 @dataclass(frozen=True)
@@ -127,16 +133,25 @@ class Params:
                                   "coils; 0: the valve closes)", 0.0, 0.5)
     UA_loop: float = param(0.0, "W/K", "conductance of the loop's pipes to the outdoor air, supply and return "
                                        "together (0: no pipe loss)", 0.0, 200.0)
+    V_loop: float = param(0.0, "m3", "water in the loop's pipes, supply and return together (0: they hold none)",
+                          0.0, 0.2)
 
 
-STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar")
+STATES = ("T", "T_ret", "T_sup", "E_heat", "E_solar", "T_pipe_sup", "T_pipe_ret")
 # positions in the packed parameters and the state vector, from the declarations
 P = indices(Params)
 X = indices(STATES)
 
 
 def initial_state(params: Params) -> np.ndarray:
-    return np.array([params.T_init, params.T_init, params.T_init, 0.0, 0.0], dtype=np.float64)
+    return np.array([params.T_init, params.T_init, params.T_init, 0.0, 0.0, params.T_init, params.T_init],
+                    dtype=np.float64)
+
+
+@njit(cache=True)
+def pipe(h, x, k, p, T_in, T_air, m):
+    """One of the loop's two pipes (half its conductance and water; loop_pipe.step)."""
+    return loop_pipe.step(h, x, k, 0.5 * p[P.V_loop] * RHO_CP, 0.5 * p[P.UA_loop], T_in, T_air, m)
 
 
 @njit(cache=True)
@@ -171,16 +186,6 @@ def control(x, p, on, T_storage):
 
 
 @njit(cache=True)
-def line(T, T_air, m, UA):
-    """Outlet of a loop pipe of conductance UA to the outdoor air that water enters at T with flow
-    m (the steady exchanger solution: the pipe holds no heat). Written so that UA = 0 returns T bit
-    for bit."""
-    if m <= 0.0:
-        return T
-    return T - (T - T_air) * (-math.expm1(-UA / (m * CP)))
-
-
-@njit(cache=True)
 def advance(h, x, p, S, T_air, m):
     """Advance the collector node over h with the inlet at the last return temperature x[T_ret]
     (exact solution of the node's linear equation, a2 linearised about the step start).
@@ -210,9 +215,10 @@ def advance(h, x, p, S, T_air, m):
         T_mean = 0.5 * (T0 + T1)
     x[X.T] = T1
     Q_loss = S - m * CP * (T_mean - T_in) - C * (T1 - T0) / h if h > 0.0 else 0.0
-    T_coil = line(T_mean, T_air, m, 0.5 * p[P.UA_loop])
-    Q_loss += m * CP * (T_mean - T_coil)
-    x[X.T_sup] = T_coil if m > 0.0 else T1
+    T_coil, Q_pipe = pipe(h, x, X.T_pipe_sup, p, T_mean, T_air, m)
+    Q_loss += Q_pipe
+    # without flow the supply sensor reads the collector, or the pipe's standing water
+    x[X.T_sup] = T_coil if m > 0.0 else (x[X.T_pipe_sup] if p[P.V_loop] > 0.0 else T1)
     return T_coil, Q_loss
 
 
@@ -222,13 +228,13 @@ def settle(h, x, p, m, T_ret, T_storage, T_air):
     inlet: its enthalpy difference goes into the node. Without flow the return follows the storage
     sensor (what the flow modulation compares with at the next start). Returns the return pipe's
     loss [W]."""
+    T_in, Q_pipe = pipe(h, x, X.T_pipe_ret, p, T_ret, T_air, m)
     if m > 0.0:
-        T_in = line(T_ret, T_air, m, 0.5 * p[P.UA_loop])
         x[X.T] += m * CP * h * (T_in - x[X.T_ret]) / (p[P.c_eff] * p[P.area])
         x[X.T_ret] = T_in
-        return m * CP * (T_ret - T_in)
-    x[X.T_ret] = T_storage
-    return 0.0
+    else:
+        x[X.T_ret] = T_storage
+    return Q_pipe
 
 
 class Kind(ComponentKind):
@@ -252,7 +258,8 @@ class Kind(ComponentKind):
         return initial_state(inst.params)
 
     def stored_energy(self, inst, x):
-        return inst.params.c_eff * inst.params.area * float(x[X.T])
+        pipes = 0.5 * inst.params.V_loop * RHO_CP * (float(x[X.T_pipe_sup]) + float(x[X.T_pipe_ret]))
+        return inst.params.c_eff * inst.params.area * float(x[X.T]) + pipes
 
     def emit(self, c, inst):
         o = inst.options
@@ -260,7 +267,7 @@ class Kind(ComponentKind):
         valve = isinstance(o["top"], dict) or isinstance(o["bottom"], dict)
         top_up, top = c.port_layers(inst, "top", st)
         bottom_up, bottom = c.port_layers(inst, "bottom", st)
-        self._check_coils(c, inst, valve)
+        solar_coils.check(c, inst, valve)
         if inst.params.dT_off > inst.params.dT_on:
             c.problems.append(f"{inst.at('dT_off')} = {inst.params.dT_off}: must not exceed dT_on = "
                               f"{inst.params.dT_on} K")
@@ -363,34 +370,3 @@ class Kind(ComponentKind):
             c.emit("signals",
                    f"{sig('Q_flow_upper', 'W', 'heat given by the upper coil (0 while it carries no flow)')} = {q_up}",
                    f"{sig('E_heat_upper', 'J', 'heat given by the upper coil since the start')} = {e_up}[0]")
-
-    def _check_coils(self, c, inst, valve):
-        """Each coil runs downward (inlet above outlet); two coils need UA_upper and the upper coil
-        above the lower one; UA_upper or a leak without a second coil is a mistake."""
-        o = inst.options
-        for side in ("upper", "lower") if valve else ("",):
-            top, bottom = (f"{k}.{side}" if side else k for k in ("top", "bottom"))
-            t, b = (o[k][side] if side and _valve(o[k]) else o[k] for k in ("top", "bottom"))
-            # a plain height beside a valve is named top.upper at the table's line, as before
-            where = inst.at(top) if side and not _valve(o["top"]) else inst.at("top") + top[3:]
-            if is_number(t) and is_number(b) and t < b:
-                c.problems.append(f"{where} = {t}: must be above {bottom} = {b}")
-        ua_up = inst.params.UA_upper
-        if valve and not ua_up > 0.0:
-            c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: two coils need the upper coil's conductance "
-                              "> 0 W/K (area x 675 W/(m2 K))")
-        if not valve and ua_up > 0.0:
-            c.problems.append(f"{inst.at('UA_upper')} = {ua_up}: only with two coils, top = {{ upper = ..., "
-                              "lower = ... } and bottom = { upper = ..., lower = ... }")
-        if not valve and inst.params.leak > 0.0:
-            c.problems.append(f"{inst.at('leak')} = {inst.params.leak}: only a solar valve between two coils "
-                              "leaks; top = { upper = ..., lower = ... } and bottom = { upper = ..., lower = ... }")
-        if valve and isinstance(o["top"], dict) and is_number(o["top"].get("upper")) and is_number(o["top"].get("lower")) \
-                and o["top"]["upper"] <= o["top"]["lower"]:
-            c.problems.append(f"{inst.at('top')}.upper = {o['top']['upper']}: the upper coil's inlet must be above "
-                              f"the lower coil's, top.lower = {o['top']['lower']}")
-
-
-def _valve(port) -> bool:
-    """A port given as a three-way valve's two heights (what `c.port_layers` reads as two)."""
-    return isinstance(port, dict) and set(port) == {"upper", "lower"}

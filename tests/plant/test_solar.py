@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from plant.component import pack
-from plant.components import solar_collector as sc
+from plant.components import loop_pipe, solar_collector as sc
 from plant.errors import ConfigError
 from plant.house import load_house
 from plant.water import CP
@@ -74,13 +74,13 @@ def test_pump_hysteresis():
 
 
 def test_loop_pipes_lose_to_the_outdoor_air():
-    """UA_loop: each pipe is the steady exchanger T_air + (T - T_air) exp(-UA/2 / (m cp)); at
+    """UA_loop (holding no water): each pipe is the steady exchanger T_air + (T - T_air) exp(-UA/2 / (m cp)); at
     steady state the absorbed heat is the coil's plus the collector's and both pipes' losses, and
     the coil gets less by about UA_loop x (mean loop temperature - T_air)."""
     for T in (60.0, -3.7, 1e-300):
-        assert sc.line(T, 10.0, 0.05, 0.0) == T  # UA = 0: bit for bit
-    assert sc.line(60.0, 10.0, 0.0, 20.0) == 60.0  # standing water: no loss (the pipes hold none)
-    assert sc.line(60.0, 10.0, 0.05, 20.0) == pytest.approx(10.0 + 50.0 * np.exp(-20.0 / (0.05 * CP)), rel=1e-14)
+        assert loop_pipe.line(T, 10.0, 0.05, 0.0) == T  # UA = 0: bit for bit
+    assert loop_pipe.line(60.0, 10.0, 0.0, 20.0) == 60.0  # standing water: no loss (the pipes hold none)
+    assert loop_pipe.line(60.0, 10.0, 0.05, 20.0) == pytest.approx(10.0 + 50.0 * np.exp(-20.0 / (0.05 * CP)), rel=1e-14)
     G, T_in, T_air, m, h = 800.0, 40.0, 5.0, 0.02, 5.0
 
     def run(UA_loop):
@@ -99,6 +99,38 @@ def test_loop_pipes_lose_to_the_outdoor_air():
     assert S == pytest.approx(Q1 + loss1, rel=1e-9)  # steady: nothing stored
     assert T1 < T0
     assert Q0 - Q1 == pytest.approx(20.0 * (0.5 * (T1 + T_in) - T_air), rel=0.1)
+
+
+def test_loop_pipes_holding_water_cool_while_standing_and_keep_the_balance():
+    """loop_pipe.step with water held: the exact node (outlet and loss against the closed form,
+    energy m cp (T_in - T_mean) h = loss h + C dT to round-off), standing water cooling with the
+    time constant C / UA, and C = 0 the steady pipe bit for bit."""
+    x = np.array([60.0])
+    T_out, q = loop_pipe.step(30.0, x, 0, 0.0, 5.0, 55.0, 10.0, 0.1)
+    assert (T_out, q) == (loop_pipe.line(55.0, 10.0, 0.1, 5.0), 0.1 * CP * (55.0 - loop_pipe.line(55.0, 10.0, 0.1, 5.0)))
+    assert x[0] == 60.0  # untouched without water
+    C, UA, h = 3.1e-3 * 1000.0 * CP, 4.0, 30.0
+    x = np.array([20.0])
+    T_out, q = loop_pipe.step(h, x, 0, C, UA, 55.0, 10.0, 0.1)
+    assert 0.1 * CP * (55.0 - T_out) * h == pytest.approx(q * h + C * (x[0] - 20.0), rel=1e-12)
+    assert 20.0 < T_out < x[0] < 55.0  # cold water pushed out first, the node warms
+    x = np.array([60.0])
+    for _ in range(120):  # one hour standing
+        _, q = loop_pipe.step(h, x, 0, C, UA, 0.0, 10.0, 0.0)
+        assert q > 0.0
+    assert x[0] == pytest.approx(10.0 + 50.0 * np.exp(-3600.0 * UA / C), rel=1e-12)
+
+
+def test_a_collector_whose_loop_holds_water_closes_its_ledger_and_loses_more():
+    """A June day of house 1 with 10 W/K of loop pipes holding 6 l: the ledger closes with the
+    pipes' water in the collector's stored heat, and the storage gets less than with the same
+    pipes holding none (the standing water's heat is lost between runs)."""
+    dry = load_house("house1_solar", start="2021-06-15", overrides={"solar.UA_loop": 10.0})
+    wet = load_house("house1_solar", start="2021-06-15", overrides={"solar.UA_loop": 10.0, "solar.V_loop": 0.006})
+    for house in (dry, wet):
+        house.step(86400.0)
+        assert house.ledger()["closure"] < 1e-9
+    assert wet.get("solar.E_heat") < dry.get("solar.E_heat")
 
 
 def test_loop_pipe_loss_in_the_house_ledger(june_day):
