@@ -56,6 +56,7 @@ class Result:
     nominal: dict = field(default_factory=dict)  # jointly re-fitted nominal parameters
     pipe: dict = field(default_factory=dict)     # its replay's pipe-sensor fits (pipe_sensor.PipeFit per branch)
     refitted_with: str | None = None   # a sensor effect fitted again on the model with this plant effect (forward.py)
+    fit_note: str = ""                 # why the fit took another way than the usual (stops_running)
 
     def public(self) -> dict:
         return {"id": self.id, "component": self.component if self.signal is None else self.signal,
@@ -66,7 +67,8 @@ class Result:
                 "signal": self.signal, "train_cost": self.train_cost, "heldout_cost": self.held_cost,
                 "heldout_gain": self.held_gain, "bic": self.bic, "accepted": self.accepted,
                 "evaluations": self.evaluations, "nominal_refit": dict(self.nominal),
-                "parameters_at_bound": list(self.at_bound), "relative_to_neighbours": self.local}
+                "parameters_at_bound": list(self.at_bound), "relative_to_neighbours": self.local,
+                "fit_note": self.fit_note}
 
 
 def _stderr(f, p, theta, J, n_eff):
@@ -153,8 +155,8 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
         Js = rechoose_scheme(F, replayer, theta, J)
         if Js < J:
             J = local_pass(F, params, free, theta, Js)
-    run = replayer.run(F.overrides(theta))
-    if nom and stops_running(ctx, run.rows):
+    run, note = replayer.run(F.overrides(theta)), ""
+    if nom and (stops := stops_running(ctx, run.rows)):
         # the jointly re-fitted nominals carried the candidate where the twin's unit stands while
         # the recording's runs (rigsim house 3's ground collector at UA x 0.39 with the heat pump's
         # nominal heat re-fitted up: on the held-out days its brine fell to the -5 degC limit,
@@ -162,6 +164,7 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
         # such a replay explains no recording, so the candidate is fitted again with the
         # nominals held at the baseline's calibrated values
         F, nom = TrainingCost(effect, ctx, replayer, []), []
+        note = f"with the nominal knobs re-fitted jointly, {stops}: fitted again with them held at the calibrated values"
         theta = [p.nominal for p in params]
         J = _own(F, params, free, theta)
         run = replayer.run(F.overrides(theta))
@@ -174,7 +177,7 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
                   train_cost=ctx.cost(sim, ctx.train), held_cost=ctx.cost(sim, ctx.held),
                   evaluations=len(F.cache) + 1, sim=sim, rows=rows, effect=effect,
                   nominal={**{q.name: float(v) for q, v in zip(nom, theta[ne:])}, **F.scheme},
-                  pipe=dict(run.pipe), k=len(free))
+                  pipe=dict(run.pipe), k=len(free), fit_note=note)
 
 
 NEAR = 0.15  # relative tank height within which a sensor is a neighbour (10 sensors: 0.1 apart)
