@@ -112,6 +112,7 @@ from numba import njit
 from ..component import indices, param
 from ..errors import ConfigError
 from ..water import CP, RHO
+from .storage_flows import flowing
 
 K_WATER = 0.6  # W/(m K), still-water conductivity used for the default UA_layer
 COURANT_MAX = 0.5  # per-substep bound on (outflow Courant number + conduction/coil number)
@@ -350,7 +351,9 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     nout = out_layer.shape[0]
     ncoil = coil_top.shape[0]
 
-    nsub = n_substeps(dt, T, p, in_layer, in_m, out_layer, out_m, coil_UA, coil_m, coil_top, coil_bot)
+    fin_layer, fin_m = flowing(in_layer, in_m)  # the advection's ports: the idle ones add nothing
+    fout_layer, fout_m = flowing(out_layer, out_m)
+    nsub = n_substeps(dt, T, p, fin_layer, fin_m, fout_layer, fout_m, coil_UA, coil_m, coil_top, coil_bot)
     h = dt / nsub
     hm = h / mL  # converts a mass flow into a Courant number
     hC = h / C
@@ -365,7 +368,7 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     for _s in range(nsub):
         Q_loss = _losses_and_ports(T, q_layer, uaN, Tenv, in_layer, in_m, in_T, out_layer, out_m, out_T, Q_loss)
         Q_coil = _coils(T, q_layer, coil_top, coil_bot, coil_UA, coil_m, coil_Tin, coil_Tout, Q_coil)
-        _interfaces(T, q_layer, ua, kind, hm, in_layer, in_m, out_layer, out_m)
+        _interfaces(T, q_layer, ua, kind, hm, fin_layer, fin_m, fout_layer, fout_m)
         for k in range(N):
             T[k] += q_layer[k] * hC
         _remove_inversions(T)

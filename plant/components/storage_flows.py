@@ -1,0 +1,30 @@
+"""The storage's ports that carry a flow in a step (storage.step's advection and substep count).
+
+A tank's port list is long and mostly idle: every coupling point with an inlet-mixing zone
+(switch.storage_inlet_mixing) gives it one slot per layer of the zone, forty of them on house 2,
+and all but the one the inflow enters carry 0 kg/s. The advection sums the port flows of each
+layer for every face of every substep (layers x ports), which made the port scan a third of the
+storage's step. Leaving the idle ports out changes no computed value: a face's flow plus 0.0 is
+the same flow (only the sign of a zero flow could differ, and a zero flow is tested by its
+comparisons with 0.0 alone); the flowing ports keep their order, so every sum adds the same
+terms in the same order.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def flowing(layer, m):
+    """(layers, flows) of the ports whose flow is not 0.0 (NaN kept), in their order."""
+    n = layer.shape[0]
+    keep_layer = np.empty(n, np.int64)
+    keep_m = np.empty(n)
+    c = 0
+    for i in range(n):
+        if m[i] != 0.0:
+            keep_layer[c] = layer[i]
+            keep_m[c] = m[i]
+            c += 1
+    return keep_layer[:c], keep_m[:c]
