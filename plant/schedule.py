@@ -64,9 +64,20 @@ def apply_bindings(t, h, bind, s):
     previous value (a gap in a recording)."""
     bt, bv, idx, mode = bind
     n = bt.shape[0]
+    # the series share one time grid (House.bind): one search per mode and step, not per series
+    # (a replay binds nine; their searches were a twentieth of its step)
+    i_hold = i_lin = -2  # -2: not searched yet
     for j in range(idx.shape[0]):
-        tt = t + 0.5 * h if mode[j] == LINEAR else t
-        i = np.searchsorted(bt, tt, side="right") - 1
+        if mode[j] == LINEAR:
+            tt = t + 0.5 * h
+            if i_lin == -2:
+                i_lin = np.searchsorted(bt, tt, side="right") - 1
+            i = i_lin
+        else:
+            tt = t
+            if i_hold == -2:
+                i_hold = np.searchsorted(bt, tt, side="right") - 1
+            i = i_hold
         if i < 0:
             v = bv[0, j]
         elif i >= n - 1 or mode[j] != LINEAR:
