@@ -104,21 +104,18 @@ def _own(F, params, free, theta) -> float:
 
 
 def stops_running(ctx, rows) -> str:
-    """'' unless the replay `rows` has a unit stand (its output at or below the threshold that
-    says it ran, Roles.ran) at more than unit_modes.MAX_SHARE of the samples at which the
+    """'' unless the replay `rows` has a unit stand (unit_modes.identify: the recording's unit
+    runs, the replay's does not) at more than unit_modes.MAX_SHARE of the samples at which the
     recording shows it running, and at more than twice the nominal replay's share; else which."""
-    from .unit_modes import MAX_SHARE
+    from .unit_modes import MAX_SHARE, identify
 
-    n = min(len(rows), len(ctx.rec))
-    for unit, (sig, thr) in ctx.roles.ran.items():
-        if not ctx.rec.has(sig):
+    now = identify(ctx.rec, rows, ctx.index, ctx.roles.ran)
+    before = identify(ctx.rec, ctx.nominal.rows, ctx.index, ctx.roles.ran) if ctx.nominal is not None else {}
+    for unit, m in now.items():
+        if not m["lab_runs"]:
             continue
-        runs = np.nan_to_num(np.asarray(ctx.rec.data[sig][:n], float)) > thr
-        if not runs.any():
-            continue
-        share = float(np.mean(rows[:n, ctx.index(sig)][runs] <= thr))
-        nominal = (float(np.mean(ctx.nominal_sim[:n, ctx.measured.index(sig)][runs] <= thr))
-                   if sig in ctx.measured and ctx.nominal_sim is not None else 0.0)
+        share = m["lab_runs_twin_not"] / m["lab_runs"]
+        nominal = before[unit]["lab_runs_twin_not"] / m["lab_runs"] if unit in before else 0.0
         if share > max(MAX_SHARE, 2.0 * nominal):
             return (f"{unit} stands at {share * 100:.0f} % of the samples where the recording has it running "
                     f"(the nominal replay at {nominal * 100:.0f} %)")

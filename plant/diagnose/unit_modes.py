@@ -45,7 +45,7 @@ def identify(rec, rows: np.ndarray, catalogue_index, ran: dict) -> dict:
         share = float(differ.sum() / running) if running else 0.0
         masked = bool(differ.any() and share <= MAX_SHARE)
         out[unit] = {"mask": differ if masked else np.zeros(n, bool), "samples": int(differ.sum()),
-                     "lab_runs_twin_not": int((runs_lab & ~runs_twin).sum()),
+                     "lab_runs": int(runs_lab.sum()), "lab_runs_twin_not": int((runs_lab & ~runs_twin).sum()),
                      "twin_runs_lab_not": int((runs_twin & ~runs_lab).sum()),
                      "share_of_running": share, "masked": masked,
                      "why": ("occasional states the twin's unit model does not have (a lock-out, a trip, a "

@@ -230,10 +230,11 @@ def test_a_candidate_replay_that_stops_a_running_unit_is_recognised():
     rec = Samples("test", "2021-01-20", t, {"heat_pump.Q_flow": q})
     nominal = q.copy()
     nominal[100:110] = 0.0                     # the nominal replay starts it 10 samples late
-    ctx = SimpleNamespace(roles=r, rec=rec, index=r.catalogue.index, measured=["heat_pump.Q_flow"],
-                          nominal_sim=nominal[:, None])
     rows = np.zeros((t.size, len(r.catalogue.names)))
     col = r.catalogue.index("heat_pump.Q_flow")
+    nominal_rows = rows.copy()
+    nominal_rows[:, col] = nominal
+    ctx = SimpleNamespace(roles=r, rec=rec, index=r.catalogue.index, nominal=SimpleNamespace(rows=nominal_rows))
     k = int(MAX_SHARE * 500)
     rows[:, col] = q
     rows[100:100 + k, col] = 0.0
@@ -241,5 +242,5 @@ def test_a_candidate_replay_that_stops_a_running_unit_is_recognised():
     rows[100:100 + k + 1, col] = 0.0
     assert stops_running(ctx, rows) == ("heat_pump stands at 20 % of the samples where the recording has it running "
                                         "(the nominal replay at 2 %)")
-    ctx.nominal_sim = rows[:, [col]].copy()    # no worse than the nominal replay: not named
+    ctx.nominal = SimpleNamespace(rows=rows.copy())  # no worse than the nominal replay: not named
     assert stops_running(ctx, rows) == ""

@@ -124,6 +124,14 @@ class UnitEffect(Effect):
     def key(self, local: str) -> str:
         return f"{self.at}.{local}"
 
+    def pump_stands(self, ctx) -> str:
+        """'' unless the recording has the instance's pump command `on` and it is (almost) never
+        on (a loop's candidate cannot show); else why."""
+        on = self.key("on")
+        if ctx.rec.has(on) and np.mean(ctx.rec.on(on)) < 0.005:
+            return f"{on}: the loop's pump (almost) never runs in the recording"
+        return ""
+
     def nominal(self, ctx, local: str) -> float:
         """The instance's value of its parameter or option `local` in the replayed house file."""
         from ...declaration import load

@@ -265,12 +265,11 @@ class SolarValveLeakage(PortValveLeakage):
     def plausible(self, ctx):
         # unlike a generator's valve it needs no switching: the coil not selected sits elsewhere in
         # the tank than the one in use, so a leak through it shows in either position
-        cmd, on = self.key("upper"), self.key("on")
+        cmd = self.key("upper")
         if not ctx.rec.has(cmd):
             return False, f"the recording has no {cmd}: which coil the valve was set to is unknown"
-        if ctx.rec.has(on) and np.mean(ctx.rec.on(on)) < 0.005:
-            return False, f"{on}: the loop's pump (almost) never runs in the recording"
-        return True, ""
+        stands = self.pump_stands(ctx)
+        return not stands, stands
 
     def _runs(self, ctx) -> tuple:
         runs = ctx.rec.on(self.key("on"))

@@ -4,8 +4,6 @@ is a factor on (or, for the loop pipes, an addition to) a parameter the kind alr
 of a house file too (`P_heat_nom = ...`)."""
 from __future__ import annotations
 
-import numpy as np
-
 from .base import Param, UnitEffect, register
 
 HEAT_PUMPS = ("heat_pump_air", "heat_pump_brine")
@@ -168,9 +166,8 @@ class CollectorLoopLoss(UnitEffect):
 
     def plausible(self, ctx):
         self._file = self.nominal(ctx, "UA_loop")
-        if ctx.rec.has(self.key("on")) and np.mean(ctx.rec.on(self.key("on"))) < 0.005:
-            return False, f"{self.key('on')}: the loop's pump (almost) never runs in the recording"
-        return True, ""
+        stands = self.pump_stands(ctx)
+        return not stands, stands
 
     def overrides(self, theta):
         return {self.key("UA_loop"): self._file + float(theta[0])}
