@@ -47,6 +47,11 @@ class PacedClock:
     factor 1 is real time, N is N x accelerated. Lateness of each step (wall time behind the
     schedule) is kept in a ring of the last 100,000 steps. A run that falls behind does not try
     to catch up by bursting: it restarts its schedule at its next slot and counts the lateness.
+    What it does with the slots it missed: by default they are dropped (the simulated time falls
+    behind the wall clock; a controller under test sees a pause). `catch_up=True` gives them to
+    the next step instead (one step of dt x (1 + missed)): the simulated time stays locked to
+    the wall clock x factor, as PHIL needs, where real benches keep running while the twin
+    stalls and the heat they delivered in the meantime belongs to the model's span.
 
     `phase` (s, 0 <= phase < dt/factor) puts the steps at that offset within the cycle of the
     system clock (at 1 s cycles, phase 0.2 steps at every whole second + 0.2 s), so processes
@@ -56,7 +61,8 @@ class PacedClock:
 
     mode = "paced"
 
-    def __init__(self, factor: float = 1.0, dt: float = 1.0, phase: float | None = None):
+    def __init__(self, factor: float = 1.0, dt: float = 1.0, phase: float | None = None,
+                 catch_up: bool = False):
         if not factor > 0 or not dt > 0:
             raise ValueError(f"paced clock: factor = {factor}, dt = {dt}; both must be positive")
         if phase is not None and not 0.0 <= phase < dt / factor:
@@ -64,6 +70,8 @@ class PacedClock:
         self.factor = factor
         self.dt = dt
         self.phase = phase
+        self.catch_up = catch_up
+        self.missed = 0                     # slots missed (dropped, or caught up with catch_up)
         self._tick: Callable[[float], None] | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -99,6 +107,7 @@ class PacedClock:
     def _run(self) -> None:
         period = self.dt / self.factor
         due = self._first_due(period)
+        owed = 0                            # missed slots the next step makes up (catch_up)
         while not self._stop.is_set():
             wait = due - time.perf_counter()
             if wait > 0:
@@ -108,11 +117,15 @@ class PacedClock:
             self._late[self._n % self._late.shape[0]] = max(0.0, now - due)
             self._start[self._n % self._start.shape[0]] = now
             self._n += 1
-            self._tick(self.dt)
+            self._tick(self.dt * (1 + owed))
+            owed = 0
             due += period
             behind = time.perf_counter() - due
             if behind > 10 * period:  # far behind: restart the schedule at its next slot (same phase)
-                due += math.ceil(behind / period) * period
+                missed = math.ceil(behind / period)
+                due += missed * period
+                self.missed += missed
+                owed = missed if self.catch_up else 0
 
     def lateness(self) -> np.ndarray:
         """Lateness [s] of the recorded steps."""

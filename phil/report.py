@@ -9,8 +9,10 @@ bench within 0.1 %):
   * model: the heat the simulated radiator circuit took from the water the bench delivered,
     sum of m_meas cp (T_sup_meas - T_return_model) dt over the same steps (mixer.Q_flow, the
     ledger's heat in of plant/houses/house1_phil.toml).
-Both sides run on their own paced clocks: when one of them stalls (a loaded machine, a busy PLC)
-and catches up, the meter counted a different span than the model's steps did, and the heat
+Both sides run on their own paced clocks. The twin's stays on the wall clock: slots it missed
+while stalled (a loaded machine) go into its next step (gateway/clock.py catch_up; reported as
+caught_up_s). When the bench stalls (a busy PLC) and drops time, or the twin's steps are late by
+less than it makes up, the meter counted a different span than the model's steps did, and the heat
 differs by about the mean power times that drift. The bench's clock (T_PLC_s, read with the meter)
 says how long its meter counted: the report gives the drift and the heat error over the same span
 (the bench's heat scaled to the twin's span) beside the raw one.
@@ -266,6 +268,8 @@ def format_report(report: dict[str, Any]) -> str:
     lat = report["lateness_ms"]
     lines.append(f"  step lateness: median {lat['median']} ms, p99 {lat['p99']} ms; the twin's step "
                  f"(exchanges + house): median {report['step_ms']['median']} ms, p99 {report['step_ms']['p99']} ms")
+    if report.get("caught_up_s"):
+        lines.append(f"  fell behind the wall clock: {report['caught_up_s']:g} simulated s made up in longer steps")
     phase = report.get("phase_s") or {}
     if phase.get("set") is not None and phase.get("kept_median") is not None:
         lines.append(f"  steps at {phase['kept_median']:.4f} s into each {report['cycle_s']:g} s cycle of the "
