@@ -306,10 +306,11 @@ def print_day(day: dict, speed: float, step: float) -> list[str]:
               + ", ".join(f"{k} {'n/a' if v is None else f'{v:.3f}'}" for k, v in b["follow_rms"].items()))
     print(f"  comparison: the same house alone with an ideal bench used {day['alone_space_heating_kWh']:.3f} kWh "
           f"for space heating ({100 * (sh['heat_model_kWh'] / day['alone_space_heating_kWh'] - 1):+.2f} % in PHIL); "
-          f"lateness p99 {day['lateness_ms']['p99']:.2f} ms at a {day['cycle_s'] * 1e3:.1f} ms cycle")
+          f"lateness p99 {day['lateness_ms']['p99']:.2f} ms at a {day['cycle_s'] * 1e3:.1f} ms cycle; "
+          f"{day.get('caught_up_s', 0.0):g} s caught up in longer steps")
     # over the span the bench's clock says its meter counted, as the brine and grid loops and the
-    # test: where the twin falls behind the benches' clocks now and then (a lateness p99 above
-    # the cycle) the raw figure also counts the meters' extra seconds
+    # test; the twin makes up the slots it missed (PacedClock catch_up), so the raw figure differs
+    # from it only where a bench's clock dropped time
     return [f"phil_heat_error_pct={sh['heat_error_same_span_pct']:.4f}",
             f"phil_heat_error_raw_pct={sh['heat_error_pct']:.4f}"]
 
