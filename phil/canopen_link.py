@@ -22,6 +22,14 @@ step or flood the bus at 200x. The link waits up to `timeout` for the answers; e
 carry the wall time they arrived, and one older than `max_age_s` comes back NaN with the reason
 ("silent: ..."), which the guard (phil/safety.py) holds, flags, calls stale and stops on exactly
 as for a Modbus bench (as ServedLink's silent PLC).
+
+One SYNC per step per bus: a lab puts several benches on one CAN bus, and every node on it
+answers every SYNC. The links of the benches on one bus therefore share one `CanopenBus` (one
+canopen Network, one python-can connection), the bus's only SYNC producer as CiA 301 expects;
+its `exchange` sends every bench's RPDOs, then one SYNC, then collects each bench's TPDOs. So
+all benches sample at the same instant, each answers its own set-points of this step (not a SYNC
+meant for another bench's), and each TPDO is sent once a step rather than once per bench. A link
+made with a bus spec string owns a bus of its own and exchanges alone, as before.
 """
 from __future__ import annotations
 
@@ -40,6 +48,7 @@ from gateway.transports.canopen_od import build_object_dictionary, pdo_bits
 from phil.benchmap import BenchMap
 from phil.master import ExchangeError
 from phil.pdo_layout import Pdo, canopen_map, pdo_layout
+from plant.errors import ConfigError
 
 SYNC_EVERY = 1                  # TPDO transmission type: sampled and sent at every SYNC
 OPERATIONAL = 5
@@ -54,27 +63,92 @@ class Received:
     wall: float | None = None
 
 
-class CanopenLink:
-    """A canopen RemoteNode of one bench on a python-can bus ("virtual:lab", "socketcand:...")."""
+class CanopenBus:
+    """One python-can bus ("virtual:lab", "socketcand:...") as one canopen Network, shared by the
+    links of the benches on it: their nodes, and the bus's one SYNC producer."""
 
-    def __init__(self, bench: BenchMap, bus: str, timeout: float = 0.5, max_age_s: float = 2.0) -> None:
-        self.bench, self.timeout, self.max_age_s = bench, timeout, max_age_s
-        self.co = canopen_map(bench)
-        self.layout = pdo_layout(bench)
+    def __init__(self, bus: str) -> None:
         self.spec = parse_bus_spec(bus)
-        self.node_id = self.co.dmap.canopen.node_id
         self.network = canopen.Network(open_bus(self.spec))
         self.network.NOTIFIER_CYCLE = 0.1     # bounds how long close() waits for the bus thread
         self.network.connect()
+        self.links: list[CanopenLink] = []
+
+    def link(self, bench: BenchMap, timeout: float = 0.5, max_age_s: float = 2.0) -> CanopenLink:
+        return CanopenLink(bench, self, timeout, max_age_s)
+
+    def _join(self, link: CanopenLink) -> None:
+        # two masters' views of one node id would each take the other's TPDOs for their own
+        for other in self.links:
+            if other.node_id == link.node_id:
+                raise ConfigError(f"{link.where}: bench {link.bench.id} and bench {other.bench.id} have the "
+                                  f"same node id; give one of them another [canopen] node_id")
+        self.network.add_node(link.node)
+        self.links.append(link)
+
+    def release(self, link: CanopenLink) -> None:
+        """A link closed: its node leaves the network; the last one disconnects it."""
+        if link not in self.links:
+            return
+        self.links.remove(link)
+        if self.links:
+            self.network.unsubscribe(0x700 + link.node_id, link._on_state)
+            del self.network[link.node_id]
+        else:
+            self.network.disconnect()
+
+    def exchange(self, values: dict[CanopenLink, dict[str, float]]
+                 ) -> dict[CanopenLink, dict[str, float] | ExchangeError]:
+        """Each link's set-points out (RPDOs), then ONE SYNC for all, then each link's measurements
+        (its TPDOs sampled at that SYNC). A link that fails (ExchangeError) fails alone: its error
+        is its answer, the others are still exchanged. Each link's `last_exchange_s` runs from its
+        set-points going out to its last TPDO of the step coming in (or its wait ending)."""
+        out: dict[CanopenLink, dict[str, float] | ExchangeError] = {}
+        began, counts = {}, {}
+        for link, wanted in values.items():
+            began[link] = time.monotonic()
+            try:
+                link.write(wanted)
+                counts[link] = link._counts()
+            except ExchangeError as exc:
+                out[link], link.last_exchange_s = exc, time.monotonic() - began[link]
+        if counts:
+            synced = time.monotonic()
+            try:
+                self.network.sync.transmit()
+            except (can.CanError, OSError) as exc:
+                for link in counts:
+                    out[link] = ExchangeError(link.bench.id, "connection", f"{link.where}: cannot send SYNC ({exc})")
+                    link.last_exchange_s = time.monotonic() - began[link]
+                counts = {}
+            for link, before in counts.items():
+                # one deadline from the one SYNC: a silent bench costs the step one timeout, not one each
+                out[link] = link._collect(before, synced + link.timeout)
+                link.last_exchange_s = link.answered - began[link]
+        return {link: out[link] for link in values}
+
+
+class CanopenLink:
+    """A canopen RemoteNode of one bench on a python-can bus: a bus spec ("virtual:lab",
+    "socketcand:...") opens a bus of this link's own, a CanopenBus shares that one."""
+
+    def __init__(self, bench: BenchMap, bus: str | CanopenBus, timeout: float = 0.5, max_age_s: float = 2.0) -> None:
+        self.bench, self.timeout, self.max_age_s = bench, timeout, max_age_s
+        self.co = canopen_map(bench)
+        self.layout = pdo_layout(bench)
+        self.node_id = self.co.dmap.canopen.node_id
+        self.bus = CanopenBus(bus) if isinstance(bus, str) else bus
+        self.spec, self.network = self.bus.spec, self.bus.network
         self.node = canopen.RemoteNode(self.node_id, build_object_dictionary(self.co.dmap))
         self.node.sdo.RESPONSE_TIMEOUT = timeout
-        self.network.add_node(self.node)
+        self.bus._join(self)
         self.network.subscribe(0x700 + self.node_id, self._on_state)
         self.received = {p.number: Received() for p in self.layout if p.kind == "T"}
         self.by_cob_id = {p.cob_id(self.node_id): p.number for p in self.layout if p.kind == "T"}
         self.cond = threading.Condition()
         self.configured = self.started = False
         self.last_exchange_s = 0.0
+        self.answered = 0.0               # monotonic time the last read's measurements were in
         self.reasons: dict[str, str] = {}
 
     @property
@@ -82,7 +156,7 @@ class CanopenLink:
         return f"node 0x{self.node_id:02X} on {self.spec}"
 
     def close(self) -> None:
-        self.network.disconnect()
+        self.bus.release(self)
 
     # ----------------------------------------------------------------------- configuration
     def _on_state(self, can_id: int, data: bytes, timestamp: float) -> None:
@@ -184,16 +258,26 @@ class CanopenLink:
 
     def read(self) -> dict[str, float]:
         """SYNC, then the measurements (device units) its TPDOs answered; NaN where a TPDO is
-        older than max_age_s, with the reason in `reasons`."""
+        older than max_age_s, with the reason in `reasons`. The SYNC goes to the whole bus: with
+        other benches on it, exchange them together through CanopenBus.exchange."""
         self._ready()
-        with self.cond:
-            before = {n: rx.count for n, rx in self.received.items()}
+        before = self._counts()
+        synced = time.monotonic()
         self._send(self.network.sync.transmit, "SYNC")
+        return self._collect(before, synced + self.timeout)
+
+    def _counts(self) -> dict[int, int]:
         with self.cond:
-            self.cond.wait_for(lambda: all(rx.count > before[n] for n, rx in self.received.items()),
-                               self.timeout)
+            return {n: rx.count for n, rx in self.received.items()}
+
+    def _collect(self, before: dict[int, int], deadline: float) -> dict[str, float]:
+        """The measurements of the TPDOs received after `before`, waited for until `deadline`."""
+        with self.cond:
+            done = self.cond.wait_for(lambda: all(rx.count > before[n] for n, rx in self.received.items()),
+                                      max(deadline - time.monotonic(), 0.0))
             frames = {n: (rx.data, rx.wall) for n, rx in self.received.items()}
         now, out, self.reasons = time.monotonic(), {}, {}
+        self.answered = max(wall for _, wall in frames.values()) if done and frames else now
         for pdo in self.layout:
             if pdo.kind == "T":
                 out.update(self._values(pdo, *frames[pdo.number], now))

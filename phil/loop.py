@@ -24,7 +24,7 @@ import numpy as np
 from gateway.clock import PacedClock
 from gateway.transports.can_bus import parse_bus_spec
 from phil.benchmap import BenchMap, load_bench_map
-from phil.canopen_link import CanopenLink
+from phil.canopen_link import CanopenBus, CanopenLink
 from phil.exports import exports
 from phil.master import BenchLink, ExchangeError
 from phil.served import ServedLink, SharedServer
@@ -147,6 +147,7 @@ class PhilLoop:
         self.channels: dict[str, BenchChannel] = {}
         self.addresses = {n: a if isinstance(a, BenchAddress) else BenchAddress(*a) for n, a in benches.items()}
         servers: list[SharedServer] = []
+        buses: dict[str, CanopenBus] = {}       # by bus spec: one network and one SYNC per bus
         for name, where in self.addresses.items():
             bmap = load_bench_map(name)
             if bmap.id not in WIRINGS:
@@ -157,7 +158,8 @@ class PhilLoop:
                 link: BenchLink | ServedLink | CanopenLink = ServedLink(bmap, server, options.served_age_s)
                 link.device.subscribe(self._bus_event)
             elif where.bus:
-                link = CanopenLink(bmap, where.bus, options.timeout_s, options.pdo_age_s)
+                bus = buses.get(spec := str(parse_bus_spec(where.bus))) or buses.setdefault(spec, CanopenBus(where.bus))
+                link = bus.link(bmap, options.timeout_s, options.pdo_age_s)
             else:
                 link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
             self.channels[name] = BenchChannel(
@@ -245,26 +247,13 @@ class PhilLoop:
 
     def _exchange_all(self, dt: float, counted: bool = True) -> dict[str, float]:
         row: dict[str, float] = {}
+        answers: dict[str, tuple[dict[str, float] | None, str, bool]] = {}
         for name, ch in self.channels.items():
-            wanted = ch.wiring.setpoints(self.house)
-            if ch.origin is None:
-                ch.origin = {k: wanted[k] for k in ch.wiring.cumulative}
-            wanted = {k: v - ch.origin.get(k, 0.0) for k, v in wanted.items()}
-            ch.sent = ch.limiter.limit(wanted, dt)
-            measured, failure, tried = None, "", False
-            if ch.failed_at is not None and time.monotonic() - ch.failed_at < self.o.retry_s:
-                failure = ch.failure       # not tried again yet: a dead bench must not stall the others
-            else:
-                tried = True
-                try:
-                    measured = ch.link.exchange(ch.sent)
-                    ch.failed_at = None
-                except ExchangeError as exc:
-                    failure = ch.failure = f"{exc.kind}: {exc.detail}"
-                    ch.failed_at = time.monotonic()
-            wall = time.monotonic()
+            if name not in answers:
+                answers.update(self._exchange(name, dt))
+            measured, failure, tried = answers[name]
             exchange_s = ch.link.last_exchange_s if tried else math.nan
-            judged = ch.guard.judge(measured, wall, failure, getattr(ch.link, "reasons", None), ch.sent)
+            judged = ch.guard.judge(measured, time.monotonic(), failure, getattr(ch.link, "reasons", None), ch.sent)
             for iname, j in judged.items():
                 if not j.ok:
                     self._event({"kind": "rejected", "device": name, "point": iname,
@@ -281,6 +270,30 @@ class PhilLoop:
                 row[f"{name}.{k}.flag"] = 0.0 if j.ok else 1.0
             row[f"{name}.exchange_ms"] = exchange_s * 1e3
         return row
+
+    def _exchange(self, name: str, dt: float) -> dict[str, tuple[dict[str, float] | None, str, bool]]:
+        """Set-points and exchange for bench `name` or, CANopen, for all on its bus at once (their
+        set-points, then one SYNC) -> (measurements or None, failure, tried) each."""
+        bus = getattr(self.channels[name].link, "bus", None)        # a CanopenLink's CanopenBus
+        chs = {n: ch for n, ch in self.channels.items() if n == name or bus and getattr(ch.link, "bus", None) is bus}
+        for ch in chs.values():
+            wanted = ch.wiring.setpoints(self.house)
+            ch.origin = ch.origin if ch.origin is not None else {k: wanted[k] for k in ch.wiring.cumulative}
+            ch.sent = ch.limiter.limit({k: v - ch.origin.get(k, 0.0) for k, v in wanted.items()}, dt)
+        # a bench that failed is tried again after retry_s: a dead bench must not stall the others
+        out = {n: (None, ch.failure, False) for n, ch in chs.items()
+               if ch.failed_at is not None and time.monotonic() - ch.failed_at < self.o.retry_s}
+        due = {n: ch for n, ch in chs.items() if n not in out}
+        answers = bus.exchange({ch.link: ch.sent for ch in due.values()}) if bus and due else {}
+        for n, ch in due.items():
+            try:
+                answer = answers[ch.link] if bus else ch.link.exchange(ch.sent)
+            except ExchangeError as exc:
+                answer = exc
+            failed = isinstance(answer, ExchangeError)
+            ch.failure = f"{answer.kind}: {answer.detail}" if failed else ch.failure
+            ch.failed_at, out[n] = (time.monotonic(), (None, ch.failure, True)) if failed else (None, (answer, "", True))
+        return out
 
     def _record(self, row: dict[str, float], t: float) -> None:
         if not self.recorder:

@@ -15,7 +15,7 @@ import pytest
 from gateway.maps import codec
 from gateway.transports.can_bus import open_bus
 from phil.benchmap import load_bench_map
-from phil.canopen_link import CanopenLink
+from phil.canopen_link import CanopenBus, CanopenLink
 from phil.emulator.server import BenchServer
 from phil.loop import PhilLoop, PhilOptions, parse_bench
 from phil.master import ExchangeError
@@ -187,3 +187,75 @@ def test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints(tmp
     used = float(data[-1][head.index("space_heating.STM_HCVLaM_degC.used")])
     assert not math.isnan(used) and 0.0 < used < 95.0              # the last good value, held
     assert events(tmp_path / "run")[-1]["kind"] == "stop"
+
+
+@pytest.mark.realtime
+def test_two_benches_on_one_bus_one_sync_a_step_and_each_tpdo_once(tmp_path):
+    """Space heating and hot water as two nodes on one bus, one loop: one SYNC producer (CiA 301),
+    so each step puts exactly one SYNC on the bus, before it both benches' RPDOs, after it each
+    bench's TPDOs once; both benches' measurements come back."""
+    bus, names = "virtual:phil-canopen-one-sync", ("space_heating", "tap_water")
+    servers = [BenchServer(name, speed=100.0, can=bus).start() for name in names]
+    spy = open_bus(bus)
+    try:
+        loop = PhilLoop("house1", {n: parse_bench(f"{n}=canopen:{bus}")[1] for n in names},
+                        PhilOptions(speed=100.0, dt=2.0, hours=0.05, typeday=1, warmup_s=20.0,
+                                    record=tmp_path / "run"))
+        report = loop.run()
+        time.sleep(0.05)
+    finally:
+        for server in servers:
+            server.stop()
+    frames = _frames(spy)
+    spy.shutdown()
+    head, data = rows(tmp_path / "run")
+    steps = len(data)
+    # 100 steps, fewer if the paced clock made up missed slots in longer steps (catch_up); one SYNC each
+    assert report["stop_reason"] == "end of run" and 50 <= steps <= 100
+    syncs = [i for i, m in enumerate(frames) if m.arbitration_id == 0x80]
+    print(f"{len(syncs)} SYNC frames in {steps} steps")
+    assert len(syncs) == steps
+    for name in names:
+        node = load_bench_map(name).dmap.canopen.node_id
+        rpdo, tpdos = 0x200 + node, [p.cob_id(node) for p in pdo_layout(load_bench_map(name)) if p.kind == "T"]
+        counts = {hex(c): sum(m.arbitration_id == c for m in frames) for c in tpdos}
+        assert counts == {hex(c): steps for c in tpdos}, name
+        # every step: this bench's set-points before the SYNC, its TPDOs after it and before the next
+        for i, at in enumerate(syncs):
+            since = syncs[i - 1] if i else 0
+            assert any(m.arbitration_id == rpdo for m in frames[since:at]), (name, i)
+            upto = syncs[i + 1] if i + 1 < len(syncs) else len(frames)
+            assert {m.arbitration_id for m in frames[at:upto]} >= set(tpdos), (name, i)
+        b = report["benches"][name]
+        assert not b["rejected"] and not b["failed_exchanges"]
+        for i in load_bench_map(name).measurements():
+            assert not math.isnan(float(data[-1][head.index(f"{name}.{i.name}")])), (name, i.name)
+
+
+@pytest.mark.realtime
+def test_a_missing_bench_on_a_shared_bus_fails_alone_and_the_last_close_disconnects():
+    """Through the shared bus object: the space-heating node is not on the bus, so its exchange
+    fails (naming the fix) while the hot-water bench on the same bus and SYNC is exchanged; the
+    network stays open until its last link is closed."""
+    bus = "virtual:phil-canopen-shared-missing"
+    server = BenchServer("tap_water", speed=1.0, can=bus).start()
+    spy = open_bus(bus)
+    shared = CanopenBus(bus)
+    missing = shared.link(load_bench_map("space_heating"), timeout=0.1)
+    there = shared.link(load_bench_map("tap_water"), timeout=0.5)
+    try:
+        for _ in range(3):
+            out = shared.exchange({missing: {}, there: {}})
+            assert isinstance(out[missing], ExchangeError) and out[missing].kind == "timeout"
+            assert "node 0x31 on virtual:phil-canopen-shared-missing: no SDO answer" in str(out[missing])
+            assert set(out[there]) == {i.name for i in load_bench_map("tap_water").measurements()}
+            assert not there.reasons and 0.0 < there.last_exchange_s < 0.1 <= missing.last_exchange_s
+        missing.close()
+        assert shared.network.bus is not None and not math.isnan(there.exchange({})["T_PLC_s"])
+    finally:
+        missing.close()
+        there.close()
+        server.stop()
+    assert shared.network.bus is None
+    assert sum(m.arbitration_id == 0x80 for m in _frames(spy)) == 4       # one SYNC an exchange
+    spy.shutdown()
