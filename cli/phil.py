@@ -80,7 +80,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from phil.benchmap import lint_bench_maps
-    from phil.loop import PhilLoop, PhilOptions, parse_bench
+    from phil.loop import PhilLoop
+    from phil.options import PhilOptions, parse_bench
     from phil.report import format_report
     from plant.errors import ConfigError
 

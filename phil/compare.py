@@ -42,7 +42,7 @@ NOT_ALONE = {"grid": "the grid; the house alone draws from no grid (outside a di
 
 def phil_house(meta: dict) -> str:
     """The [house] name of the run's PHIL variant (house1 ... house5)."""
-    from phil.loop import house_file
+    from phil.options import house_file
     from plant.declaration import load
 
     return load(house_file(str(meta.get("house", "")))).name
@@ -84,7 +84,7 @@ def simulate_alone(meta: dict, t: np.ndarray, signals: list[str]) -> dict[str, A
     signals asked for, its storages' top, bottom and SOC, and its heat per generator [kWh]."""
     from plant.declaration import load
     from plant.house import load_house
-    from phil.loop import house_file
+    from phil.options import house_file
 
     typeday = int(meta.get("typeday") or 0)
     zone = load(house_file(str(meta.get("house", "")))).instances["zone"].params

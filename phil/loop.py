@@ -27,17 +27,14 @@ from phil.benchmap import BenchMap, load_bench_map
 from phil.canopen_link import CanopenBus, CanopenLink
 from phil.exports import exports
 from phil.master import BenchLink, ExchangeError
+from phil.options import BenchAddress, PhilOptions, house_file
 from phil.served import ServedLink, SharedServer
 from phil.report import Tally
 from phil.safety import MeasurementGuard, SetpointLimiter
 from phil.wiring import WIRINGS
-from plant.errors import ConfigError, TransportError
+from plant.errors import ConfigError
 from plant.house import load_house
 from profiles.recording import Recorder
-
-#: the PHIL variant of each house, by its name and its laboratory name (plant/houses/house<N>_phil.toml)
-HOUSE_FILES = {**{f"house{n}": f"house{n}_phil" for n in range(1, 6)},
-               **{alias: f"house{n}_phil" for n, alias in enumerate(("SF1", "SF2", "SF3", "SF4", "MF5"), 1)}}
 
 
 @dataclass
@@ -55,34 +52,6 @@ class BenchChannel:
     failure: str = ""
 
 
-@dataclass
-class PhilOptions:
-    speed: float = 1.0
-    dt: float = 1.0
-    hours: float = 24.0
-    typeday: int = 0
-    record: str | Path | None = None
-    stale_s: float | None = None      # wall seconds; default: each bench map's [phil]
-    stop_s: float | None = None
-    timeout_s: float = 0.5
-    retries: int = 1
-    stop_file: str | Path | None = None
-    warmup_s: float = 600.0           # simulated s before the run proper: benches and house settle
-    retry_s: float = 1.0              # a bench whose exchange failed is tried again after this (wall s);
-                                      # meanwhile its measurements are held, the others keep their pace
-    served_age_s: float = 2.0         # served benches: a measurement not written this long (wall) is silent
-    pdo_age_s: float = 2.0            # CANopen benches: a measurement whose TPDO is this old (wall) is silent
-    start_h: float = 0.0              # hour of the profiles (type-day block) the warm-up starts at;
-                                      # the house gets there unpaced on ideal benches
-    district: str = "coses"           # the grid bench: the district file whose grid is simulated
-                                      # (the house at its node there, phil/grid.py)
-    others: str = "all"               # the grid bench: "all" the district's other houses simulated on
-                                      # the grid, "none" only the PHIL house draws
-    phase_s: float | None = None      # wall s after each whole cycle of the system clock at which the
-                                      # steps start (a lab house on its own clock); None: one cycle
-                                      # after the run starts (gateway/clock.py PacedClock)
-
-
 def kept_phase(phases: Any, around: float, cycle: float) -> float | None:
     """Median phase [s] of the steps in the cycle, taken around `around` so that steps just
     either side of the cycle's start (phase 0) do not average to half a cycle."""
@@ -90,52 +59,6 @@ def kept_phase(phases: Any, around: float, cycle: float) -> float | None:
         return None
     offset = (np.asarray(phases) - around + cycle / 2) % cycle - cycle / 2
     return float((around + np.median(offset)) % cycle)
-
-
-def house_file(house: str) -> str:
-    """The PHIL variant of a house (house1 -> plant/houses/house1_phil.toml), or a path as is."""
-    if house.endswith(".toml"):
-        return house
-    if house not in HOUSE_FILES:
-        raise ConfigError(f"twin phil {house}: no PHIL variant; known: {', '.join(sorted(HOUSE_FILES))}")
-    return HOUSE_FILES[house]
-
-
-@dataclass(frozen=True)
-class BenchAddress:
-    """Where a bench's PLC is: polled there (the twin as Modbus TCP master), served there
-    (`serve`: the twin as the server the PLC reads set-points from and writes measurements to),
-    or a CANopen node on the python-can bus `bus` (the twin as master, by PDO)."""
-
-    host: str
-    port: int
-    serve: bool = False
-    bus: str = ""
-
-    def __str__(self) -> str:
-        if self.bus:
-            return f"canopen:{self.bus}"
-        return f"{'serve:' if self.serve else ''}{self.host}:{self.port}"
-
-
-def parse_bench(spec: str) -> tuple[str, BenchAddress]:
-    """'NAME=HOST:PORT' (poll the bench PLC), 'NAME=serve:HOST:PORT' (serve it) or
-    'NAME=canopen:BUS' (its CANopen node on a bus spec, gateway/transports/can_bus.py)."""
-    name, _, address = spec.partition("=")
-    if name and address.startswith("canopen:"):
-        bus = address.removeprefix("canopen:")
-        try:
-            parse_bus_spec(bus)
-        except TransportError as exc:
-            raise ConfigError(f"--bench {spec!r}: {exc}; e.g. brine=canopen:virtual:lab") from None
-        return name, BenchAddress("", 0, bus=bus)
-    serve = address.startswith("serve:")
-    host, _, port = address.removeprefix("serve:").rpartition(":")
-    if not name or not port.isdigit():
-        raise ConfigError(f"--bench {spec!r}: expected NAME=HOST:PORT (the twin polls the bench PLC), "
-                          "NAME=serve:HOST:PORT (the PLC polls the twin) or NAME=canopen:BUS (its CANopen "
-                          "node), e.g. space_heating=127.0.0.1:5031")
-    return name, BenchAddress(host or "127.0.0.1", int(port), serve)
 
 
 class PhilLoop:
@@ -158,8 +81,10 @@ class PhilLoop:
                 link: BenchLink | ServedLink | CanopenLink = ServedLink(bmap, server, options.served_age_s)
                 link.device.subscribe(self._bus_event)
             elif where.bus:
-                bus = buses.get(spec := str(parse_bus_spec(where.bus))) or buses.setdefault(spec, CanopenBus(where.bus))
-                link = bus.link(bmap, options.timeout_s, options.pdo_age_s)
+                spec = str(parse_bus_spec(where.bus))
+                if spec not in buses:
+                    buses[spec] = CanopenBus(where.bus)
+                link = buses[spec].link(bmap, options.timeout_s, options.pdo_age_s)
             else:
                 link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
             self.channels[name] = BenchChannel(
@@ -219,9 +144,11 @@ class PhilLoop:
 
     # --- one step ------------------------------------------------------------------------------
     def step(self, dt: float) -> None:
-        """Exchange with every bench, then advance the house by dt (runs on the clock's thread)."""
+        """Exchange with every bench, then advance the house by dt (runs on the clock's thread;
+        a step that makes up missed cycles ends at the run's end, not past it)."""
         if self._done.is_set():
             return
+        dt = min(dt, max(self._end() - self.house.t, self.o.dt))
         began = time.perf_counter()
         try:
             warming = self.warmed < self.o.warmup_s
@@ -290,9 +217,11 @@ class PhilLoop:
                 answer = answers[ch.link] if bus else ch.link.exchange(ch.sent)
             except ExchangeError as exc:
                 answer = exc
-            failed = isinstance(answer, ExchangeError)
-            ch.failure = f"{answer.kind}: {answer.detail}" if failed else ch.failure
-            ch.failed_at, out[n] = (time.monotonic(), (None, ch.failure, True)) if failed else (None, (answer, "", True))
+            if isinstance(answer, ExchangeError):
+                ch.failure, ch.failed_at = f"{answer.kind}: {answer.detail}", time.monotonic()
+                out[n] = (None, ch.failure, True)
+            else:
+                ch.failed_at, out[n] = None, (answer, "", True)
         return out
 
     def _record(self, row: dict[str, float], t: float) -> None:
@@ -328,9 +257,12 @@ class PhilLoop:
             reason = ch.guard.must_stop(wall)
             if reason:
                 return reason
-        if self.house.t >= self.t0 + self.o.warmup_s + self.o.hours * 3600.0 - 1e-9:
+        if self.house.t >= self._end() - 1e-9:
             return "end of run"
         return ""
+
+    def _end(self) -> float:
+        return self.t0 + self.o.warmup_s + self.o.hours * 3600.0
 
     # --- run and stop --------------------------------------------------------------------------
     def request_stop(self) -> None:

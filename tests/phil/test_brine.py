@@ -12,7 +12,8 @@ import pytest
 
 from phil.compare import compare
 from phil.emulator.server import BenchServer, make_model
-from phil.loop import PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import PhilOptions
 from phil.report import format_report
 from plant.house import load_house
 from tests.phil.faults import assert_rejected_and_stopped, run_with_fault

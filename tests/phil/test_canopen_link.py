@@ -17,7 +17,8 @@ from gateway.transports.can_bus import open_bus
 from phil.benchmap import load_bench_map
 from phil.canopen_link import CanopenBus, CanopenLink
 from phil.emulator.server import BenchServer
-from phil.loop import PhilLoop, PhilOptions, parse_bench
+from phil.loop import PhilLoop
+from phil.options import PhilOptions, parse_bench
 from phil.master import ExchangeError
 from phil.pdo_layout import canopen_map, pdo_layout
 from phil.report import format_report

@@ -9,7 +9,8 @@ from pathlib import Path
 import pytest
 
 from phil.emulator.server import BenchServer
-from phil.loop import PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import PhilOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 

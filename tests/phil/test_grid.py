@@ -13,7 +13,8 @@ from district.grid import _dp
 from phil.benchmap import load_bench_map
 from phil.emulator.server import BenchServer, make_model
 from phil.grid import DP_PLANT, GridSide
-from phil.loop import PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import PhilOptions
 from phil.report import format_report
 from plant.water import CP
 from tests.phil.faults import assert_rejected_and_stopped, run_with_fault

@@ -16,7 +16,8 @@ import pytest
 
 from phil.emulator.server import BenchServer
 from phil.benchmap import load_bench_map
-from phil.loop import PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import PhilOptions
 from phil.report import format_report
 from tests.phil.faults import FAULT_AFTER_S, events as _events, rows as _rows, run_with_fault
 

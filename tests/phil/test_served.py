@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from phil.loop import BenchAddress, PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import BenchAddress, PhilOptions
 from tests.phil.faults import FAULT_AFTER_S
 
 ROOT = Path(__file__).resolve().parents[2]

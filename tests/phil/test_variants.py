@@ -15,7 +15,8 @@ from phil.benchmap import load_bench_map
 from phil.compare import compare
 from phil.emulator.server import BenchServer
 from phil.exports import EXPORTS
-from phil.loop import HOUSE_FILES, PhilLoop, PhilOptions
+from phil.loop import PhilLoop
+from phil.options import HOUSE_FILES, PhilOptions
 from phil.report import format_report
 from phil.wiring import WIRINGS
 from plant.errors import ConfigError
