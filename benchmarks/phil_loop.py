@@ -11,7 +11,7 @@ twin and compiled the houses (Twin, preload()), so that their start-up is not co
      (space heating, tap water, solar), then 5 houses at once (15 bench processes, one bench
      per process) with phases of their own (`twin phil --phase` 0, 0.2, ... 0.8 s, as houses on
      their own clocks), then the same 5 houses aligned (all --phase 0: every house exchanges in
-     the same instant, the worst case; --aligned-seconds, default 60 s, so that the whole run
+     the same instant, the worst case; --aligned-seconds, default 45 s, so that the whole run
      stays near 10 minutes): exchange latency set-point-out to measurement-in per bench (one
      FC16 write + one FC4 read; median, p99), step lateness of the twin's clock (median, p99),
      and the twin's share of the 1 s cycle (exchanges + house step).
@@ -36,7 +36,7 @@ aligned), phil_heat_error_pct=
 (space heating, over the same span; phil_heat_error_raw_pct= over the twin's span),
 phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (these two over the same span too) and
 phil_grid_dp_range_pa= (of the parts run).
-Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--aligned-seconds 60] [--speed 330] [--step 3]
+Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--aligned-seconds 45] [--speed 330] [--step 3]
      [--boundary-hours 0.5] [--boundary-speed 200] [--grid-others all|none]
      [--parts realtime,day,boundary]   (a short check: --parts boundary --boundary-hours 0.1)
 The machine's load average at the start and the end is printed with the wall times.
@@ -344,7 +344,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=120.0, help="real-time part: s per run")
     ap.add_argument("--houses", type=int, default=5, help="houses at once in the second real-time run")
-    ap.add_argument("--aligned-seconds", type=float, default=60.0, help="real-time part: s of the run with "
+    ap.add_argument("--aligned-seconds", type=float, default=45.0, help="real-time part: s of the run with "
                     "the houses all at phase 0 (0: not run)")
     ap.add_argument("--speed", type=float, default=330.0, help="closed loop: real time x SPEED")
     ap.add_argument("--step", type=float, default=3.0, help="closed loop: exchange step [s simulated]")
