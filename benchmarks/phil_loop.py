@@ -30,6 +30,9 @@ twin and compiled the houses (Twin, preload()), so that their start-up is not co
      min on / 10 off, the substation extracting 20 / 10 min). Heat of the bench's meter against
      the simulated side's over the same span (the bench's heat scaled to the twin's span by the
      PLC's clock: phil/report.py); the grid's differential pressure range at the node.
+  4. (--parts served-day, not in the default run: another 24 h) the SF1 day the other way round:
+     the twin serves its set-points and each bench is its PLC polling the twin (`twin bench --plc`,
+     every --served-period s of wall time); RESULT phil_served_heat_error_pct=.
 Goals (issue #25): lateness p99 < 10 ms, exchange < 5 ms on loopback. Whole run < 10 min.
 Ends with RESULT phil_exchange_p99_ms=, phil_lateness_p99_ms= (and for --houses, phased and
 aligned), phil_heat_error_pct=
@@ -38,7 +41,8 @@ phil_brine_heat_error_pct=, phil_grid_heat_error_pct= (these two over the same s
 phil_grid_dp_range_pa= (of the parts run).
 Run: python benchmarks/phil_loop.py [--seconds 120] [--houses 5] [--aligned-seconds 45] [--speed 330] [--step 3]
      [--boundary-hours 0.5] [--boundary-speed 200] [--grid-others all|none]
-     [--parts realtime,day,boundary]   (a short check: --parts boundary --boundary-hours 0.1)
+     [--parts realtime,day,boundary] [--served-period 0.005]   (a short check: --parts boundary
+     --boundary-hours 0.1; the served day: --parts served-day)
 The machine's load average at the start and the end is printed with the wall times.
 """
 from __future__ import annotations
@@ -252,6 +256,32 @@ def closed_loop(speed: float, step: float, tmp: Path) -> dict:
     return report
 
 
+def served_day(speed: float, step: float, period: float, tmp: Path) -> dict:
+    """The SF1 day the other way round: the twin serves the set-points on one Modbus TCP server
+    and each bench is its PLC polling it every `period` s of wall time (`twin bench --plc`)."""
+    import socket
+
+    with socket.socket() as sock:      # a free port for the twin's server (closed before it binds)
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    run = tmp / "sf1_day_served"
+    twin = Twin(["phil", "house1", *[f"--bench={n}=serve:127.0.0.1:{port}" for n in BENCHES],
+                 "--record", str(run), "--speed", str(speed), "--step", str(step), "--hours", "24",
+                 "--warmup", "600", "--typeday", "1", "--start", str(24.0 - 600.0 / 3600.0)])
+    for _ in BENCHES:                  # "serving bench NAME ..." once its server listens
+        twin.stdout.readline()
+    plcs = [Twin(["bench", n, "--plc", f"127.0.0.1:{port}", "--speed", str(speed), "--period", str(period)])
+            for n in BENCHES]
+    try:
+        out, _ = twin.communicate(timeout=86400.0 / speed + 300)
+    finally:
+        stop(plcs)
+    print(out.strip())
+    report = json.loads((run / "report.json").read_text())
+    report["alone_space_heating_kWh"] = alone(1, 24.0, 24.0, step)
+    return report
+
+
 #: h of type day 1 where the grid loop starts: MF5 begins feeding in during its counted half hour
 GRID_START_H = 1.8
 
@@ -295,9 +325,10 @@ def print_realtime(rt: list[dict]) -> list[str]:
     return out
 
 
-def print_day(day: dict, speed: float, step: float) -> list[str]:
+def print_day(day: dict, speed: float, step: float, served: bool = False) -> list[str]:
     sh = day["benches"]["space_heating"]
-    print(f"SF1 closed loop, type day 1, 24 h at {speed:g}x, {step:g} s steps: stopped: {day['stop_reason']}")
+    print(f"SF1 closed loop{', the bench PLCs polling the twin' if served else ''}, type day 1, 24 h at "
+          f"{speed:g}x, {step:g} s steps: stopped: {day['stop_reason']}")
     for name, b in day["benches"].items():
         err, same = b["heat_error_pct"], b.get("heat_error_same_span_pct")
         print(f"  {name:14s} heat bench {b['heat_bench_kWh']:.3f} kWh, model {b['heat_model_kWh']:.3f} kWh "
@@ -311,8 +342,9 @@ def print_day(day: dict, speed: float, step: float) -> list[str]:
     # over the span the bench's clock says its meter counted, as the brine and grid loops and the
     # test; the twin makes up the slots it missed (PacedClock catch_up), so the raw figure differs
     # from it only where a bench's clock dropped time
-    return [f"phil_heat_error_pct={sh['heat_error_same_span_pct']:.4f}",
-            f"phil_heat_error_raw_pct={sh['heat_error_pct']:.4f}"]
+    way = "served_" if served else ""
+    return [f"phil_{way}heat_error_pct={sh['heat_error_same_span_pct']:.4f}",
+            f"phil_{way}heat_error_raw_pct={sh['heat_error_pct']:.4f}"]
 
 
 def print_boundary(edge: dict[str, dict], hours: float, speed: float) -> list[str]:
@@ -337,7 +369,8 @@ def print_boundary(edge: dict[str, dict], hours: float, speed: float) -> list[st
             for name in ("brine", "grid")] + [f"phil_grid_dp_range_pa={dp_range_pa:.2f}"]
 
 
-PARTS = ("realtime", "day", "boundary")
+PARTS = ("realtime", "day", "boundary", "served-day")
+DEFAULT_PARTS = PARTS[:3]       # served-day: another 24 h loop, beyond the 10 minutes
 
 
 def main() -> int:
@@ -352,7 +385,10 @@ def main() -> int:
     ap.add_argument("--boundary-speed", type=float, default=200.0, help="brine and grid loops: real time x SPEED")
     ap.add_argument("--grid-others", choices=("all", "none"), default="all",
                     help="grid loop: the district's other houses simulated on the grid (all) or not (none)")
-    ap.add_argument("--parts", default=",".join(PARTS), help="comma-separated parts to run: " + ", ".join(PARTS))
+    ap.add_argument("--served-period", type=float, default=0.005, help="served-day: the bench PLCs' poll "
+                    "period [s wall]")
+    ap.add_argument("--parts", default=",".join(DEFAULT_PARTS), help="comma-separated parts to run: "
+                    + ", ".join(PARTS))
     a = ap.parse_args()
     parts = a.parts.split(",")
     if set(parts) - set(PARTS):
@@ -380,6 +416,10 @@ def main() -> int:
             edge = boundary_loops(a.boundary_hours, a.boundary_speed, Path(tmp), a.grid_others)
             walls["brine and grid loops"] = time.perf_counter() - t_all - sum(walls.values())
             results += print_boundary(edge, a.boundary_hours, a.boundary_speed)
+        if "served-day" in parts:
+            day = served_day(a.speed, a.step, a.served_period, Path(tmp))
+            walls["SF1 closed loop, served"] = time.perf_counter() - t_all - sum(walls.values())
+            results += print_day(day, a.speed, a.step, served=True)
     load.append(os.getloadavg())
     print("wall time " + ", ".join(f"{k} {v:.0f} s" for k, v in walls.items())
           + f"; in all {time.perf_counter() - t_all:.0f} s; load average (1, 5, 15 min) at the start "
