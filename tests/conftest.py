@@ -141,6 +141,7 @@ REALTIME_SECONDS = {
     "tests/phil/test_brine.py::test_sf3_closed_loop_brine_heat_agrees_with_the_ground_collector": 12.5,
     "tests/phil/test_canopen_link.py::test_sf3_closed_loop_over_canopen_brine_heat_agrees_with_the_ground_collector": 21.0,
     "tests/phil/test_canopen_link.py::test_bench_that_stops_sending_tpdos_is_stale_and_gets_the_safe_setpoints": 2.0,
+    "tests/phil/test_canopen_link.py::test_two_benches_on_one_bus_one_sync_a_step_and_each_tpdo_once": 4.0,
     "tests/phil/test_grid.py::test_district_house_alone_on_its_grid_against_the_grid_emulator": 12.0,
     "tests/phil/test_grid.py::test_district_house_with_the_other_houses_against_the_grid_emulator": 12.5,
     "tests/phil/test_variants.py::test_twin_phil_runs_the_variant": 4.5,
