@@ -70,32 +70,24 @@ class PhilLoop:
         self.channels: dict[str, BenchChannel] = {}
         self.addresses = {n: a if isinstance(a, BenchAddress) else BenchAddress(*a) for n, a in benches.items()}
         servers: list[SharedServer] = []
+        opened: list[BenchLink | ServedLink | CanopenLink] = []
         buses: dict[str, CanopenBus] = {}       # by bus spec: one network and one SYNC per bus
-        for name, where in self.addresses.items():
-            bmap = load_bench_map(name)
-            if bmap.id not in WIRINGS:
-                raise ConfigError(f"--bench {name}: not wired into the PHIL loop yet; wired: {', '.join(WIRINGS)}")
-            if where.serve:
-                server = SharedServer.at(where.host, where.port)
-                servers += [server] if server not in servers else []
-                link: BenchLink | ServedLink | CanopenLink = ServedLink(bmap, server, options.served_age_s)
-                link.device.subscribe(self._bus_event)
-            elif where.bus:
-                spec = str(parse_bus_spec(where.bus))
-                if spec not in buses:
-                    buses[spec] = CanopenBus(where.bus)
-                link = buses[spec].link(bmap, options.timeout_s, options.pdo_age_s)
-            else:
-                link = BenchLink(bmap, where.host, where.port, options.timeout_s, options.retries)
-            self.channels[name] = BenchChannel(
-                bmap, link, SetpointLimiter(bmap),
-                MeasurementGuard(bmap, options.stale_s, options.stop_s, time.monotonic()).check_units(
-                    WIRINGS[bmap.id].pairs), WIRINGS[bmap.id])
-        for ch in self.channels.values():
-            if ch.wiring.boundary:      # the simulated side a bench needs beside the house (the grid)
-                self.house = ch.wiring.boundary(self.house, options)
-        self.names = set(self.house.catalogue.names) | set(getattr(self.house, "boundary_signals", ()))
-        self._check_wired(house)
+        try:
+            for name, where in self.addresses.items():
+                self.channels[name] = self._channel(name, where, servers, opened, buses)
+            for ch in self.channels.values():
+                if ch.wiring.boundary:      # the simulated side a bench needs beside the house (the grid)
+                    self.house = ch.wiring.boundary(self.house, options)
+            self.names = set(self.house.catalogue.names) | set(getattr(self.house, "boundary_signals", ()))
+            self._check_wired(house)
+        except BaseException:
+            # a refused configuration leaves no bus connection, socket or bus thread behind
+            for link in opened:
+                link.close()
+            for bus in buses.values():
+                if bus.network.bus is not None:
+                    bus.network.disconnect()
+            raise
         self.exports = exports(self.house, self.names)
         self.recorder = None
         for server in servers:
@@ -117,6 +109,30 @@ class PhilLoop:
         self._stop = threading.Event()
         self._done = threading.Event()
         self.clock: PacedClock | None = None
+
+    def _channel(self, name: str, where: BenchAddress, servers: list[SharedServer], opened: list,
+                 buses: dict[str, CanopenBus]) -> BenchChannel:
+        """The link to one bench (polled, served or a CANopen node) with its limiter, guard and
+        wiring; the link goes into `opened` as soon as it exists."""
+        bmap = load_bench_map(name)
+        if bmap.id not in WIRINGS:
+            raise ConfigError(f"--bench {name}: not wired into the PHIL loop yet; wired: {', '.join(WIRINGS)}")
+        if where.serve:
+            server = SharedServer.at(where.host, where.port)
+            servers += [server] if server not in servers else []
+            link: BenchLink | ServedLink | CanopenLink = ServedLink(bmap, server, self.o.served_age_s)
+            link.device.subscribe(self._bus_event)
+        elif where.bus:
+            spec = str(parse_bus_spec(where.bus))
+            if spec not in buses:
+                buses[spec] = CanopenBus(where.bus)
+            link = buses[spec].link(bmap, self.o.timeout_s, self.o.pdo_age_s)
+        else:
+            link = BenchLink(bmap, where.host, where.port, self.o.timeout_s, self.o.retries)
+        opened.append(link)
+        guard = MeasurementGuard(bmap, self.o.stale_s, self.o.stop_s, time.monotonic())
+        return BenchChannel(bmap, link, SetpointLimiter(bmap), guard.check_units(WIRINGS[bmap.id].pairs),
+                            WIRINGS[bmap.id])
 
     def _check_wired(self, house: str) -> None:
         """Every bench's wiring finds its signals in the house (house 4 has no solar collector),

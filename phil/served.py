@@ -168,9 +168,14 @@ class SharedServer:
             self.transport.start()
 
     def release(self) -> None:
+        """A bench is done with the server; the last one stops it and takes it off the address,
+        also when it never started (a loop refused before its run): the next loop on that
+        address must not find this one's devices."""
         self.users -= 1
-        if self.users <= 0 and self.transport is not None:
-            self.transport.stop()
-            self.transport = None
+        if self.users <= 0:
+            if self.transport is not None:
+                self.transport.stop()
+                self.transport = None
             with self._lock:
-                self._open.pop((self.host, self.requested), None)
+                if self._open.get((self.host, self.requested)) is self:
+                    del self._open[(self.host, self.requested)]

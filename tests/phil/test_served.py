@@ -136,3 +136,35 @@ def test_silent_bench_plc_is_named_and_the_safe_setpoints_are_served(tmp_path):
     board = loop.channels["space_heating"].link.board
     assert board.values["set.SFW_HCRLbM_Set_l_per_min"] == 0.0 and board.values["set.STM_HCVLaM_Set_degC"] == 20.0
     assert events[-1]["kind"] == "stop"
+
+
+def test_a_loop_refused_after_its_links_opened_leaves_no_server_bus_or_socket_behind():
+    """House 4 has no solar collector: the loop is refused at its wiring check, after the served
+    bench's server, the CANopen bus and the polled bench's client exist. Nothing of them stays:
+    the address holds no server with the refused loop's devices, the virtual bus no connection,
+    and a loop on the same address afterwards serves its own bench."""
+    import socket
+
+    import can.interfaces.virtual as virtual
+
+    from phil.options import parse_bench
+    from phil.served import SharedServer
+    from plant.errors import ConfigError
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = sock.getsockname()[1]
+    bus = "phil-refused-loop"
+    benches = {"space_heating": BenchAddress("127.0.0.1", port, serve=True),
+               "tap_water": parse_bench(f"tap_water=canopen:virtual:{bus}")[1],
+               "solar": BenchAddress("127.0.0.1", 1)}
+    with pytest.raises(ConfigError, match=r"--bench solar: the PHIL house .*house4_phil.* has no"):
+        PhilLoop("house4", benches, PhilOptions())
+    assert ("127.0.0.1", port) not in SharedServer._open
+    assert bus not in virtual.channels
+    loop = PhilLoop("house4", {"tap_water": BenchAddress("127.0.0.1", port, serve=True)}, PhilOptions())
+    try:
+        link = loop.channels["tap_water"].link
+        assert link.transport.devices == [link.device]          # not the refused loop's bench too
+    finally:
+        loop.channels["tap_water"].link.close()
