@@ -240,42 +240,33 @@ def alone(typeday: int, start_h: float, hours: float, dt: float) -> float:
     return E / 3.6e6
 
 
-def closed_loop(speed: float, step: float, tmp: Path) -> dict:
-    benches = {n: start_bench(n, speed) for n in BENCHES}
-    run = tmp / "sf1_day"
-    try:
-        twin = start_house({n: port for n, (_, port) in benches.items()}, run, "--speed", str(speed),
-                           "--step", str(step), "--hours", "24", "--warmup", "600", "--typeday", "1",
-                           "--start", str(24.0 - 600.0 / 3600.0))
-        out, _ = twin.communicate(timeout=86400.0 / speed + 300)
-    finally:
-        stop([p for p, _ in benches.values()])
-    print(out.strip())
-    report = json.loads((run / "report.json").read_text())
-    report["alone_space_heating_kWh"] = alone(1, 24.0, 24.0, step)
-    return report
-
-
-def served_day(speed: float, step: float, period: float, tmp: Path) -> dict:
-    """The SF1 day the other way round: the twin serves the set-points on one Modbus TCP server
-    and each bench is its PLC polling it every `period` s of wall time (`twin bench --plc`)."""
+def closed_loop(speed: float, step: float, tmp: Path, served_period: float | None = None) -> dict:
+    """SF1's type day 1 against the three bench processes: the twin as Modbus TCP master of each,
+    or (served_period set) serving its set-points on one server, each bench its PLC polling the
+    twin every served_period s of wall time (`twin bench --plc`)."""
     import socket
 
-    with socket.socket() as sock:      # a free port for the twin's server (closed before it binds)
-        sock.bind(("127.0.0.1", 0))
-        port = sock.getsockname()[1]
-    run = tmp / "sf1_day_served"
-    twin = Twin(["phil", "house1", *[f"--bench={n}=serve:127.0.0.1:{port}" for n in BENCHES],
-                 "--record", str(run), "--speed", str(speed), "--step", str(step), "--hours", "24",
-                 "--warmup", "600", "--typeday", "1", "--start", str(24.0 - 600.0 / 3600.0)])
-    for _ in BENCHES:                  # "serving bench NAME ..." once its server listens
-        twin.stdout.readline()
-    plcs = [Twin(["bench", n, "--plc", f"127.0.0.1:{port}", "--speed", str(speed), "--period", str(period)])
-            for n in BENCHES]
+    day = ["--speed", str(speed), "--step", str(step), "--hours", "24", "--warmup", "600", "--typeday", "1",
+           "--start", str(24.0 - 600.0 / 3600.0)]
+    run = tmp / ("sf1_day_served" if served_period else "sf1_day")
+    if served_period:
+        with socket.socket() as sock:      # a free port for the twin's server (closed before it binds)
+            sock.bind(("127.0.0.1", 0))
+            port = sock.getsockname()[1]
+        twin = Twin(["phil", "house1", *[f"--bench={n}=serve:127.0.0.1:{port}" for n in BENCHES],
+                     "--record", str(run), *day])
+        for _ in BENCHES:                  # "serving bench NAME ..." once its server listens
+            twin.stdout.readline()
+        benches = [Twin(["bench", n, "--plc", f"127.0.0.1:{port}", "--speed", str(speed), "--period",
+                         str(served_period)]) for n in BENCHES]
+    else:
+        polled = {n: start_bench(n, speed) for n in BENCHES}
+        benches = [p for p, _ in polled.values()]
+        twin = start_house({n: port for n, (_, port) in polled.items()}, run, *day)
     try:
         out, _ = twin.communicate(timeout=86400.0 / speed + 300)
     finally:
-        stop(plcs)
+        stop(benches)
     print(out.strip())
     report = json.loads((run / "report.json").read_text())
     report["alone_space_heating_kWh"] = alone(1, 24.0, 24.0, step)
@@ -417,7 +408,7 @@ def main() -> int:
             walls["brine and grid loops"] = time.perf_counter() - t_all - sum(walls.values())
             results += print_boundary(edge, a.boundary_hours, a.boundary_speed)
         if "served-day" in parts:
-            day = served_day(a.speed, a.step, a.served_period, Path(tmp))
+            day = closed_loop(a.speed, a.step, Path(tmp), served_period=a.served_period)
             walls["SF1 closed loop, served"] = time.perf_counter() - t_all - sum(walls.values())
             results += print_day(day, a.speed, a.step, served=True)
     load.append(os.getloadavg())
