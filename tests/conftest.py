@@ -112,8 +112,8 @@ REALTIME_GROUP_FILES = "helics"
 # An ordinary test's process runs at the scheduler's idle policy (SCHED_IDLE; nice 19 where there is
 # none): a real-time test's processes (a twin, its bench emulators, a district) keep the run's own
 # policy and take a core the moment they wake, while the ordinary tests of the other worker go on
-# beside them. (At nice 19 a cold-cache run once left the SF2 loop 62 simulated s behind its clock
-# and its supply follow error at 0.53 K > 0.5 K: a waking nice-0 task is not sure to preempt.)
+# beside them. SCHED_IDLE, not nice 19: the kernel lets a waking task of the normal policy preempt an
+# idle-policy one at once, where nice only weighs the shares.
 def _lower_priority() -> None:
     """This process (and what it starts from now on) to the lowest CPU priority; a process
     cannot raise it again."""
