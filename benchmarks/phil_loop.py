@@ -4,7 +4,7 @@ closed loops (docs/phil.md).
 
 Every bench is a `twin bench` process on loopback, every house a `twin phil` process (the twin as
 Modbus TCP master of its benches), as in a lab: forked from this one once it has imported the
-twin and compiled the houses (Twin, preload()), so that their start-up is not counted in the
+twin and compiled the houses (cli/forked.py Twin, preload()), so that their start-up is not counted in the
 10 minutes.
   1. Real time, 1 s steps, 2 minutes (type day 1 from midnight: no unpaced pre-run, every step
      exchanges with every bench whatever the house does): house 1 with its three benches
@@ -53,23 +53,20 @@ import gc
 import importlib
 import json
 import math
-import multiprocessing
 import os
 import re
 import signal
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
 import numpy as np
 
+from cli.forked import Twin
+
 BENCHES = ("space_heating", "tap_water", "solar")
-
-
-FORK = multiprocessing.get_context("fork")
 
 
 def preload() -> None:
@@ -87,55 +84,6 @@ def preload() -> None:
     for house in ("house1_phil", "house3_phil"):
         load_house(house, controller="rule_based", overrides={"profiles.typeday": 1})
     gc.freeze()     # as twin phil and twin bench do once loaded (cli/phil.py): never collected
-
-
-def _twin_main(argv: list[str], out: int) -> None:
-    os.dup2(out, 1)
-    os.dup2(out, 2)
-    sys.stdout = open(1, "w", buffering=1, closefd=False)
-    sys.stderr = sys.stdout
-    from cli.main import main
-
-    code = main(argv)
-    sys.stdout.flush()
-    os._exit(code)
-
-
-class Twin:
-    """`twin ARGV` (cli.main) as its own process, forked from this one after preload(): the same
-    code as `python -m cli.main ARGV`, its output (stdout and stderr) read here. The subset of
-    subprocess.Popen the benchmark uses."""
-
-    def __init__(self, argv: list[str]) -> None:
-        sys.stdout.flush()
-        read, write = os.pipe()
-        self.process = FORK.Process(target=_twin_main, args=(argv, write))
-        self.process.start()
-        os.close(write)
-        self.stdout = os.fdopen(read, "r")
-        self.rest: list[str] = []
-        self.reader: threading.Thread | None = None
-
-    def poll(self) -> int | None:
-        return self.process.exitcode
-
-    def send_signal(self, sig: int) -> None:
-        if self.process.exitcode is None:
-            os.kill(self.process.pid, sig)
-
-    def kill(self) -> None:
-        self.send_signal(signal.SIGKILL)
-
-    def communicate(self, timeout: float) -> tuple[str, None]:
-        """Wait for the end (raises subprocess.TimeoutExpired) and return what it printed since."""
-        if self.reader is None:
-            self.reader = threading.Thread(target=lambda: self.rest.extend(self.stdout), daemon=True)
-            self.reader.start()
-        self.process.join(timeout)
-        if self.process.exitcode is None:
-            raise subprocess.TimeoutExpired(str(self.process.pid), timeout)
-        self.reader.join(5.0)
-        return "".join(self.rest), None
 
 
 def start_bench(name: str, speed: float, *params: str) -> tuple[Twin, int]:
