@@ -45,7 +45,6 @@ def require_tool(name: str, package: str, found: bool | None = None) -> None:
 SLOW_FIRST = (
     "tests/diagnose/test_independent.py",
     "tests/diagnose/test_cases.py",
-    "tests/district/test_federation.py",  # with the rest of its group (SAME_WORKER)
     "tests/diagnose/test_report_plots.py",
     "tests/phil/test_loop.py",
     "tests/phil/test_served.py",
@@ -56,15 +55,15 @@ SLOW_FIRST = (
     "tests/phil/test_compare.py",
 )
 
-# Files whose tests run on one worker, one after the other. Each file of "helics" starts HELICS
-# districts (a broker and its federates on loopback), so two districts never share the machine's
-# ports at once. (The real-time tests are one group of their own; "helics", which holds some, is
-# in it: REALTIME_GROUP_FILES.)
+REALTIME = "realtime"  # the marker, and the xdist group of its tests
+# Files whose tests run on one worker, one after the other. The files that start HELICS districts
+# (a broker and its federates on loopback) hold real-time tests, and are in the real-time group
+# whole, so two districts never share the machine's ports at once.
 SAME_WORKER = {
-    "tests/district/test_federation.py": "helics",
-    "tests/district/test_canopen_district.py": "helics",
-    "tests/district/test_two_hosts.py": "helics",
-    "tests/e2e/test_c_libmodbus_district.py": "helics",
+    "tests/district/test_federation.py": REALTIME,
+    "tests/district/test_canopen_district.py": REALTIME,
+    "tests/district/test_two_hosts.py": REALTIME,
+    "tests/e2e/test_c_libmodbus_district.py": REALTIME,
 }
 # Files whose tests share an expensive module- or session-scoped fixture (a diagnosis, a generated
 # recording, an FMU or a controller built, a day simulated): on one worker it is computed once per
@@ -103,10 +102,6 @@ SAME_WORKER_TESTS = {
     "tests/diagnose/test_cases.py::test_nominal_refit_stays_in_bounds_and_does_not_explain_a_concealed_effect":
         "truth-storage_heat_loss",
 }
-REALTIME = "realtime"  # the marker, and the xdist group of its tests
-# The "helics" files start districts on loopback; their real-time tests are in the real-time group,
-# so the whole of "helics" is (two districts never at once).
-REALTIME_GROUP_FILES = "helics"
 
 
 # An ordinary test's process runs at the scheduler's idle policy (SCHED_IDLE; nice 19 where there is
@@ -174,9 +169,8 @@ def pytest_xdist_make_scheduler(config, log):
         def _split_scope(self, nodeid: str) -> str:
             if nodeid in self.realtime:
                 return REALTIME
-            group = (SAME_WORKER_TESTS.get(nodeid) or SAME_WORKER.get(nodeid.split("::", 1)[0])
-                     or super()._split_scope(nodeid))
-            return REALTIME if group == REALTIME_GROUP_FILES else group
+            return (SAME_WORKER_TESTS.get(nodeid) or SAME_WORKER.get(nodeid.split("::", 1)[0])
+                    or super()._split_scope(nodeid))
 
     return FileGroups(config, log)
 
