@@ -23,7 +23,7 @@ import numpy as np
 from . import boundary, compiler, declaration
 from .compiler import Instance
 from .errors import ConfigError, closest
-from .schedule import n_steps
+from .schedule import drive_steps, n_steps, run_steps
 
 CONTROLLERS = ("rule_based", "external")
 SUPERVISORY = ("rule_based", "heat_pump_rules", "soc_rules", "substation_rules")  # whose commands "external" hands to the gateway
@@ -204,7 +204,7 @@ class House:
     def _advance(self, dt: float, n: int, out=None, rec_every: int = 0) -> int:
         h = dt / n
         out = out if out is not None else np.zeros((0, len(self.catalogue) + 1))
-        rows = self._plant.module.run(n, h, self.t, *self._args(), out, rec_every)
+        rows = self._plant.module.advance(run_steps(self.t, h, n), *self._args(), out, rec_every)
         self.t += dt
         return rows
 
@@ -268,7 +268,7 @@ class House:
         switch = np.concatenate([[min(0.0, times[0])], 0.5 * (times[:-1] + times[1:])])
         self.bind(names, switch, cmd, interpolation="hold")
         out = np.empty((len(times), len(self.catalogue)))
-        self._plant.module.drive(times, cmd, *self._args(), out)
+        self._plant.module.advance(drive_steps(times, cmd), *self._args(), out, 0)
         self.t = float(times[-1])
         return out
 

@@ -34,7 +34,7 @@ def _plan_span(plan, k, a, b, row, rec):
 def drive_plan(times, cmd):
     """The spans [t0, t1, command row, recorded sample or -1] that replay a command table from
     t = 0: row i holds from sample i to i + 1, a change is applied at the midpoint (the samples
-    cannot tell when it happened). One plan for the compiled and the Python-stepped drive."""
+    cannot tell when it happened)."""
     n = times.shape[0]
     plan = np.empty((4 * n, 4))
     k = _plan_span(plan, 0, 0.0, times[0], 0, 0)
@@ -51,6 +51,24 @@ def drive_plan(times, cmd):
             k = _plan_span(plan, k, t0, tm, i - 1, -1)
             k = _plan_span(plan, k, tm, t1, i, i)
     return plan[:k]
+
+
+@njit(cache=True)
+def drive_steps(times, cmd):
+    """drive_plan's spans as the rows (t0, h, n, recorded sample or -1) the generated advance
+    steps through: n equal steps of h (n_steps), n = 0 for a span of no length."""
+    spans = drive_plan(times, cmd)
+    plan = np.empty((spans.shape[0], 4))
+    for i in range(spans.shape[0]):
+        a, b = spans[i, 0], spans[i, 1]
+        n = n_steps(b - a) if b > a else 0
+        plan[i, 0], plan[i, 1], plan[i, 2], plan[i, 3] = a, (b - a) / n if n > 0 else 0.0, n, spans[i, 3]
+    return plan
+
+
+def run_steps(t0: float, h: float, n: int) -> np.ndarray:
+    """The one row of a run: n steps of h from t0, no sample recorded at its end."""
+    return np.array([[t0, h, float(n), -1.0]])
 
 
 HOLD, LINEAR = 0, 1
