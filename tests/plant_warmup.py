@@ -1,8 +1,8 @@
 """Compile every shipped house once per test run, on every core, before the tests start (#27).
 
-A plant is compiled by numba when it is first loaded: house 1 takes ~50 s of CPU (with the
-component kernels every house shares), each other house 10-20 s; afterwards it loads from the
-on-disk plant cache (plant/__init__.py) in ~1 s. Left to the tests, the two pytest-xdist workers
+A plant is compiled by numba when it is first loaded: house 1 takes ~30 s of CPU (with the
+component kernels every house shares), each other house 10-15 s; afterwards it loads from the
+on-disk plant cache (plant/__init__.py) in ~1 s. Left to the tests, the pytest-xdist workers
 can compile the same house at the same time (twice the CPU for one result), and the test that
 happens to load a house first pays for it inside its own 300 s timeout, which a district's
 federates or a `twin` subprocess compiling on a loaded machine can overrun. Here each house is
@@ -10,9 +10,9 @@ compiled once, in a pool of processes, while the workers collect the tests
 (tests/conftest.py: whole-suite runs with workers only); a house already in the cache costs a
 load of ~1 s.
 
-After the shipped houses, the same pool compiles the house-1 variants every diagnosis of a house-1
-recording replays (DIAGNOSIS_VARIANTS: the derived circuit cut with the twin's or the lab's sensor
-heights, each with and without the re-fit's port mixing, and the whole house with it), with the
+After the shipped houses, the same pool compiles the variants the diagnoses of house-1 and house-2
+recordings replay (DIAGNOSIS_VARIANTS: the derived circuit cut with the twin's or the lab's sensor
+heights, each with and without the re-fit's port mixing, and house 1 whole with it), with the
 replay's `drive`: a dozen diagnosis tests need them, and both workers would otherwise compile the
 same ones side by side when the diagnosis files start.
 """
@@ -46,27 +46,36 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
     return Path(path).name, time.monotonic() - t, None
 
 
-# (label, house: "house1" or "cut" (its derived circuit cut, plant/diagnose/derive.py), overrides that
-# change the generated plant): what a diagnosis of a house-1 recording loads besides the file's
-# plant. Heights and the mixing volume are parameters of the step (any values give the same plant);
-# given at all they compile another: sensors read at heights (a columns file's), and an inflow
-# spread beyond its port layer (calibration.NOMINAL_REFIT's switch.storage_inlet_mixing).
+# (label, house, cut, overrides that change the generated plant): what a diagnosis loads besides the
+# file's plant (cut: the house's derived circuit cut, plant/diagnose/derive.py). Heights and the
+# mixing volumes are parameters of the step (any values give the same plant); given at all they
+# compile another: sensors read at heights (a columns file's), and an inflow spread beyond its port
+# layer (calibration.NOMINAL_REFIT's switch.storage_inlet_mixing, house 2's heating branch too).
+# House 2's are those of its rig recording (tests/diagnose/test_any_house.py), found by loading
+# every plant a diagnosis of it replays.
 _LAB = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)],
         "dhw_storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
 _MIXING = {"switch.storage_inlet_mixing": 0.025}
+_H2 = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
 DIAGNOSIS_VARIANTS = (
-    ("house1 (driven)", "house1", {}),
-    ("house1 + port mixing", "house1", _MIXING),
-    ("house1 cut", "cut", {}),
-    ("house1 cut + port mixing", "cut", _MIXING),
-    ("house1 cut at the lab's sensors", "cut", _LAB),
-    ("house1 cut at the lab's sensors + port mixing", "cut", {**_LAB, **_MIXING}),
+    ("house1 (driven)", "house1", False, {}),
+    ("house1 + port mixing", "house1", False, _MIXING),
+    ("house1 cut", "house1", True, {}),
+    ("house1 cut + port mixing", "house1", True, _MIXING),
+    ("house1 cut at the lab's sensors", "house1", True, _LAB),
+    ("house1 cut at the lab's sensors + port mixing", "house1", True, {**_LAB, **_MIXING}),
+    ("house2 cut at the rig's sensors", "house2", True, _H2),
+    ("house2 cut at the rig's sensors + port mixing", "house2", True, {**_H2, **_MIXING}),
+    ("house2 cut at the rig's sensors + heating port mixing", "house2", True,
+     {**_H2, "heating.storage_inlet_mixing": 0.025}),
+    ("house2 cut at the rig's sensors + both port mixings", "house2", True,
+     {**_H2, **_MIXING, "heating.storage_inlet_mixing": 0.025}),
 )
 
 
-def compile_variant(label: str, house: str, overrides: dict) -> tuple[str, float, str | None]:
+def compile_variant(label: str, house: str, cut: bool, overrides: dict) -> tuple[str, float, str | None]:
     """Load one variant as a replay does (external controller) and drive it for two samples, so
-    that its step, run and drive are compiled (or found in the cache): (label, seconds, error)."""
+    that its advance is compiled (or found in the cache): (label, seconds, error)."""
     t = time.monotonic()
     try:
         import numpy as np
@@ -74,10 +83,10 @@ def compile_variant(label: str, house: str, overrides: dict) -> tuple[str, float
         from plant.house import load_house
 
         path = house
-        if house == "cut":
+        if cut:
             from plant.diagnose.derive import derive
 
-            path = str(derive("house1", "circuit").path())
+            path = str(derive(house, "circuit").path())
         h = load_house(path, start="2021-01-10", controller="external", overrides=overrides or None)
         h.drive(np.array([0.0, 60.0]), [], np.zeros((2, 0)))
         h.close()
@@ -111,5 +120,5 @@ class Warmup:
                 f"{time.monotonic() - self.t0:.0f} s by {self.jobs} processes (slowest {slowest[0]} "
                 f"{slowest[1]:.0f} s)")
         failed += [f"{name} ({error.splitlines()[0][:120]})" for name, _, error in variants if error]
-        line += f", and {len(variants)} house-1 variants a diagnosis replays"
+        line += f", and {len(variants)} variants a diagnosis replays"
         return line + (f"; failed, left to their tests: {', '.join(failed)}" if failed else "")
