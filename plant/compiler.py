@@ -48,7 +48,8 @@ class StoragePorts:
     fixed_out: list = field(default_factory=list)
     coils: list = field(default_factory=list)        # (slot, top layer, bottom layer)
     ARRAYS = ("in_layer", "in_m", "in_T", "out_layer", "out_m", "out_T",  # per inflow, outflow slot; per coil;
-              "coil_top", "coil_bot", "coil_UA", "coil_m", "coil_Tin", "coil_Tout", "q")  # scratch: the kernel's order
+              "coil_top", "coil_bot", "coil_UA", "coil_m", "coil_Tin", "coil_Tout",
+              "q", "fin_layer", "fin_m", "fout_layer", "fout_m")  # scratch: the kernel's (step_into's) order
 
     def array(self, what: str) -> str:
         """The name in the step of the port array `what` (one of ARRAYS)."""

@@ -339,8 +339,20 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
 
     Fills out_T (mean temperature of each outflow over the step) and coil_Tout (mean coil outlet
     temperature); q_layer (len N) is scratch.  Returns (Q_loss, Q_coil) [W], step means: heat lost
-    to ambient and heat given by the coils to the tank.
+    to ambient and heat given by the coils to the tank. (step_into with its port scratch
+    allocated here; the compiled plant allocates it once and calls step_into.)
     """
+    nin, nout = in_layer.shape[0], out_layer.shape[0]
+    return step_into(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T, coil_top, coil_bot, coil_UA,
+                     coil_m, coil_Tin, coil_Tout, q_layer, np.empty(nin, np.int64), np.empty(nin),
+                     np.empty(nout, np.int64), np.empty(nout))
+
+
+@njit(cache=True)
+def step_into(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
+              coil_top, coil_bot, coil_UA, coil_m, coil_Tin, coil_Tout, q_layer,
+              fin_layer, fin_m, fout_layer, fout_m):
+    """step, with the flowing ports' scratch (fin_*: the inflows' length, fout_*: the outflows')."""
     N = T.shape[0]
     mL = RHO * p[P.volume] / N
     C = CP * mL
@@ -351,8 +363,10 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     nout = out_layer.shape[0]
     ncoil = coil_top.shape[0]
 
-    fin_layer, fin_m = flowing(in_layer, in_m)  # the advection's ports: the idle ones add nothing
-    fout_layer, fout_m = flowing(out_layer, out_m)
+    # the advection's ports: the idle ones add nothing
+    k_in = flowing(in_layer, in_m, fin_layer, fin_m)
+    k_out = flowing(out_layer, out_m, fout_layer, fout_m)
+    fin_layer, fin_m, fout_layer, fout_m = fin_layer[:k_in], fin_m[:k_in], fout_layer[:k_out], fout_m[:k_out]
     nsub = n_substeps(dt, T, p, fin_layer, fin_m, fout_layer, fout_m, coil_UA, coil_m, coil_top, coil_bot)
     h = dt / nsub
     hm = h / mL  # converts a mass flow into a Courant number

@@ -82,7 +82,7 @@ class Kind(ComponentKind):
         c.values[f"{inst.name}.Q_coil"] = Qc  # the coils' heat of the kernel, for allocate
         ports = c.storage_ports(inst.name, ask=False)  # the names of its arrays, in the kernel's order
         arrays = ", ".join(map(ports.array, ports.ARRAYS))
-        c.emit("storages", f"{Ql}, {Qc} = {c.module(storage.__name__)}.step(h, {x}, {p}, {arrays})")
+        c.emit("storages", f"{Ql}, {Qc} = {c.module(storage.__name__)}.step_into(h, {x}, {p}, {arrays})")
 
     def emit_signals(self, c, inst):
         """State, parameters, sensors, signals and ledger of a storage; returns (state view,
@@ -172,4 +172,6 @@ class Kind(ComponentKind):
             f"{a('coil_top')} = {c.int_array(top)}", f"{a('coil_bot')} = {c.int_array(bot)}",
             f"{a('coil_UA')} = {c.float_array(ports.n_coil)}", f"{a('coil_m')} = {c.float_array(ports.n_coil)}",
             f"{a('coil_Tin')} = {c.float_array(ports.n_coil)}", f"{a('coil_Tout')} = {c.float_array(ports.n_coil)}",
-            f"{a('q')} = {c.float_array(inst.params.n_layers)}"])
+            f"{a('q')} = {c.float_array(inst.params.n_layers)}",
+            f"{a('fin_layer')} = {c.int_array(np.zeros(ports.n_in))}", f"{a('fin_m')} = {c.float_array(ports.n_in)}",
+            f"{a('fout_layer')} = {c.int_array(np.zeros(ports.n_out))}", f"{a('fout_m')} = {c.float_array(ports.n_out)}"])
