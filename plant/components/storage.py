@@ -110,9 +110,8 @@ import numpy as np
 from numba import njit
 
 from ..component import indices, param
-from ..errors import ConfigError
 from ..water import CP, RHO
-from .storage_flows import flowing
+from .storage_flows import flowing, port_layer
 
 K_WATER = 0.6  # W/(m K), still-water conductivity used for the default UA_layer
 COURANT_MAX = 0.5  # per-substep bound on (outflow Courant number + conduction/coil number)
@@ -343,8 +342,8 @@ def step(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     allocated here; the compiled plant allocates it once and calls step_into.)
     """
     nin, nout = in_layer.shape[0], out_layer.shape[0]
-    return step_into(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T, coil_top, coil_bot, coil_UA,
-                     coil_m, coil_Tin, coil_Tout, q_layer, np.empty(nin, np.int64), np.empty(nin),
+    return step_into(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T, coil_top, coil_bot, coil_UA, coil_m,
+                     coil_Tin, coil_Tout, q_layer, np.empty(nin, np.int64), np.empty(nin),
                      np.empty(nout, np.int64), np.empty(nout))
 
 
@@ -393,19 +392,6 @@ def step_into(dt, T, p, in_layer, in_m, in_T, out_layer, out_m, out_T,
     for c in range(ncoil):
         coil_Tout[c] *= inv
     return Q_loss * inv, Q_coil * inv
-
-
-# ----------------------------------------------------------------------------------------------
-# port heights (not part of the kernel)
-
-
-def port_layer(height_m: float, params: Params) -> int:
-    """Layer index (0 = top) that contains a port at height_m above the tank bottom."""
-    H = params.height
-    if not (0.0 <= height_m <= H):
-        raise ConfigError(f"port height {height_m} m: outside the tank; allowed 0 … {H} m")
-    from_bottom = min(int(height_m / H * params.n_layers), params.n_layers - 1)
-    return params.n_layers - 1 - from_bottom
 
 
 __all__ = [

@@ -1,4 +1,5 @@
-"""The storage's ports that carry a flow in a step (storage.step's advection and substep count).
+"""The storage's ports: the layer a port's height falls in, and the ports that carry a flow in a
+step (storage.step's advection and substep count).
 
 A tank's port list is long and mostly idle: every coupling point with an inlet-mixing zone
 (switch.storage_inlet_mixing) gives it one slot per layer of the zone, forty of them on house 2,
@@ -12,8 +13,19 @@ arrays allocated per call were an eighth of a small plant's step).
 """
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
+
+from ..errors import ConfigError
+
+
+def port_layer(height_m: float, params) -> int:
+    """Layer index (0 = top) that contains a port at height_m above the tank bottom (params: a
+    storage's Params)."""
+    H = params.height
+    if not (0.0 <= height_m <= H):
+        raise ConfigError(f"port height {height_m} m: outside the tank; allowed 0 … {H} m")
+    from_bottom = min(int(height_m / H * params.n_layers), params.n_layers - 1)
+    return params.n_layers - 1 - from_bottom
 
 
 @njit(cache=True)
