@@ -71,7 +71,9 @@ def test_storage_ports_name_their_arrays():
     ports = c.storage_ports("dhw_tank")
     assert ports.array("in_m") == "dhw_tank_in_m" and ports.array("coil_Tout") == "dhw_tank_coil_Tout"
     assert ports.coil_heat(1) == "dhw_tank_coil_Q_1"
-    assert [ports.array(a) for a in StoragePorts.ARRAYS][-1] == "dhw_tank_q"
+    # the kernel's scratch last: the layer heat and the flowing ports (storage.step_into's order)
+    assert [ports.array(a) for a in StoragePorts.ARRAYS][-5:] == [
+        "dhw_tank_q", "dhw_tank_fin_layer", "dhw_tank_fin_m", "dhw_tank_fout_layer", "dhw_tank_fout_m"]
     with pytest.raises(KeyError, match="'coil_T': no port array of a storage; one of in_layer, "):
         ports.array("coil_T")
 
