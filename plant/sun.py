@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 DAY = 86400.0
@@ -38,9 +39,25 @@ COS_ZENITH_MIN = math.cos(math.radians(85.0))
 
 
 @njit(cache=True)
+def site(latitude, tilt, azimuth):
+    """The plane's fixed trigonometry: (sin, cos) of the latitude, of the tilt and of the azimuth
+    from south, for latitude/tilt/azimuth [deg]. A plant computes it once per call of its step
+    loop, not per step: it is four of the eight sines and cosines a step's sun would take."""
+    phi, beta, gamma = math.radians(latitude), math.radians(tilt), math.radians(azimuth - 180.0)
+    return (math.sin(phi), math.cos(phi), math.sin(beta), math.cos(beta), math.sin(gamma), math.cos(gamma))
+
+
+@njit(cache=True)
 def position(tau, latitude, longitude):
     """(cos zenith, declination [rad], hour angle [rad]) at local standard time tau [s since
     1 January 00:00 CET], for a site at latitude/longitude [deg, north/east positive]."""
+    phi = math.radians(latitude)
+    return _position(tau, longitude, math.sin(phi), math.cos(phi))
+
+
+@njit(cache=True)
+def _position(tau, longitude, sp, cp_):
+    """position with the latitude's sine and cosine given."""
     tau = tau % YEAR
     B = 2.0 * math.pi * (tau / DAY) / 365.0
     decl = (0.006918 - 0.399912 * math.cos(B) + 0.070257 * math.sin(B) - 0.006758 * math.cos(2 * B)
@@ -49,17 +66,21 @@ def position(tau, latitude, longitude):
                    - 0.014615 * math.cos(2 * B) - 0.04089 * math.sin(2 * B))  # minutes
     minutes = (tau % DAY) / 60.0 + 4.0 * (longitude - 15.0) + eot
     omega = math.radians(15.0 * (minutes / 60.0 - 12.0))
-    phi = math.radians(latitude)
-    cos_z = math.sin(phi) * math.sin(decl) + math.cos(phi) * math.cos(decl) * math.cos(omega)
+    cos_z = sp * math.sin(decl) + cp_ * math.cos(decl) * math.cos(omega)
     return cos_z, decl, omega
 
 
 @njit(cache=True)
 def incidence(decl, omega, latitude, tilt, azimuth):
     """cos of the angle of incidence on a plane of tilt [deg] and azimuth [deg, 180 = south]."""
-    phi, beta, gamma = math.radians(latitude), math.radians(tilt), math.radians(azimuth - 180.0)
-    sd, cd, sp, cp_ = math.sin(decl), math.cos(decl), math.sin(phi), math.cos(phi)
-    sb, cb, sg, cg = math.sin(beta), math.cos(beta), math.sin(gamma), math.cos(gamma)
+    return _incidence(decl, omega, site(latitude, tilt, azimuth))
+
+
+@njit(cache=True)
+def _incidence(decl, omega, g):
+    """incidence on the plane of site() g."""
+    sp, cp_, sb, cb, sg, cg = g
+    sd, cd = math.sin(decl), math.cos(decl)
     co, so = math.cos(omega), math.sin(omega)
     return (sd * sp * cb - sd * cp_ * sb * cg + cd * cp_ * cb * co + cd * sp * sb * cg * co
             + cd * sb * sg * so)
@@ -69,14 +90,34 @@ def incidence(decl, omega, latitude, tilt, azimuth):
 def plane(tau, E_dir, E_dif, latitude, longitude, tilt, azimuth, albedo):
     """Irradiance on the plane at local standard time tau from the horizontal beam E_dir and
     diffuse E_dif [W/m2]: (beam, diffuse incl. ground reflection, cos incidence) [W/m2, W/m2, 1]."""
-    cos_z, decl, omega = position(tau, latitude, longitude)
-    cos_t = incidence(decl, omega, latitude, tilt, azimuth)
+    return plane_at(tau, E_dir, E_dif, longitude, albedo, site(latitude, tilt, azimuth))
+
+
+@njit(cache=True)
+def plane_at(tau, E_dir, E_dif, longitude, albedo, g):
+    """plane on the plane of site() g (latitude, tilt and azimuth)."""
+    cos_z, decl, omega = _position(tau, longitude, g[0], g[1])
+    cos_t = _incidence(decl, omega, g)
     beam = 0.0
     if cos_z > 0.0 and cos_t > 0.0 and E_dir > 0.0:
         beam = E_dir * cos_t / max(cos_z, COS_ZENITH_MIN)
-    cb = math.cos(math.radians(tilt))
+    cb = g[3]
     diffuse = max(E_dif, 0.0) * 0.5 * (1.0 + cb) + albedo * (max(E_dir, 0.0) + max(E_dif, 0.0)) * 0.5 * (1.0 - cb)
     return beam, diffuse, max(cos_t, 0.0)
+
+
+def emit_plane(c, inst, p: str, P) -> tuple[str, str, str]:
+    """A kind's irradiance on its plane in the generated step: the plane's site() before the step
+    loop (once per call), plane_at in the step's hydraulics, at the step's tau shifted to the
+    calendar (calendar_shift). P names the indices of latitude, longitude, tilt, azimuth and
+    albedo in the kind's parameters p. -> the locals (beam, diffuse, cos incidence)."""
+    shift = c.param(inst, np.array([calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
+    smod = c.module(__name__)
+    g, beam, dif, cos_t = (c.var(v) for v in ("sun_site", "G_beam", "G_diffuse", "cos_theta"))
+    c.header.append(f"{g} = {smod}.site({p}[{P.latitude}], {p}[{P.tilt}], {p}[{P.azimuth}])")
+    c.emit("hydraulics", f"{beam}, {dif}, {cos_t} = {smod}.plane_at(tau + {shift}[0], E_dir, E_dif, "
+                         f"{p}[{P.longitude}], {p}[{P.albedo}], {g})")
+    return beam, dif, cos_t
 
 
 def calendar_shift(decl) -> float:

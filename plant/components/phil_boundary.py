@@ -132,17 +132,14 @@ class SolarKind(ComponentKind):
 
     def emit(self, c, inst):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
+        beam, dif, cos_t = sun.emit_plane(c, inst, p, collector.P)
         T_in = c.signal(inst, "T_ret", "degC", "input", "measured return from the lab = collector inlet (live boundary)")
         m_in = c.signal(inst, "m_flow", "kg/s", "input", "measured solar flow (live boundary)")
         c.write_command("sense", f"{inst.name}.T_ret", f"{x}[{collector.X.T}]")
         c.write_command("sense", f"{inst.name}.m_flow", "0.0")
-        mod, smod = c.module(collector.__name__), c.module(sun.__name__)
-        beam, dif, cos_t, S, m, T_sup, Q_loss, Q = (c.var(v) for v in (
-            "G_beam", "G_diffuse", "cos_theta", "S", "m_solar", "T_sup", "Q_loss", "Q_solar"))
+        mod = c.module(collector.__name__)
+        S, m, T_sup, Q_loss, Q = (c.var(v) for v in ("S", "m_solar", "T_sup", "Q_loss", "Q_solar"))
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{collector.P.latitude}], "
-               f"{p}[{collector.P.longitude}], {p}[{collector.P.tilt}], {p}[{collector.P.azimuth}], {p}[{collector.P.albedo}])",
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
                f"{m} = max({m_in}, 0.0)",
                f"{x}[{collector.X.T_ret}] = {T_in}",

@@ -82,12 +82,10 @@ class Kind(ComponentKind):
 
     def emit(self, c, inst):
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
-        mod, smod = c.module(__name__), c.module(sun.__name__)
-        beam, dif, cos_t, P, T_cell = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "P_pv", "T_cell"))
+        beam, dif, cos_t = sun.emit_plane(c, inst, p, PAR)
+        mod = c.module(__name__)
+        P, T_cell = c.var("P_pv"), c.var("T_cell")
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{PAR.latitude}], "
-               f"{p}[{PAR.longitude}], {p}[{PAR.tilt}], {p}[{PAR.azimuth}], {p}[{PAR.albedo}])",
                f"{P}, {T_cell} = {mod}.power({p}, {beam} + {dif}, T_air)",
                f"{x}[{X.E_el}] += {P} * h")
         sig = lambda local, unit, desc: c.signal(inst, local, unit, "output", desc)  # noqa: E731

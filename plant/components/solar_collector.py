@@ -272,12 +272,12 @@ class Kind(ComponentKind):
             c.problems.append(f"{inst.at('dT_off')} = {inst.params.dT_off}: must not exceed dT_on = "
                               f"{inst.params.dT_on} K")
         x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
-        shift = c.param(inst, np.array([sun.calendar_shift(getattr(c, "decl", None))]), suffix="_sun")
+        sky = sun.emit_plane(c, inst, p, P)
         k = c.storage_ports(st).add_coil(inst, top, bottom)
         k_up = c.storage_ports(st).add_coil(inst, top_up, bottom_up) if valve else None
         T_st = c.s(o["sensor"]) if isinstance(o["sensor"], str) else "0.0"
         on, m_set = self._emit_control(c, inst, x, p, T_st)
-        beam, dif, S, m, T_sup, Q_loss = self._emit_collector(c, x, p, shift, on, m_set)
+        beam, dif, S, m, T_sup, Q_loss = self._emit_collector(c, x, p, sky, on, m_set)
         Q, T_ret, Q_pipe = c.var("Q_solar"), c.var("T_ret"), c.var("Q_pipe")
         side, coil_out = self._emit_coils(c, inst, st, k, k_up, p, m, T_sup)
         c.emit("volumes",
@@ -301,14 +301,12 @@ class Kind(ComponentKind):
         c.write_command("control", f"{inst.name}.m_flow_set", m_cmd)
         return on, m_set
 
-    def _emit_collector(self, c, x, p, shift, on, m_set):
-        """Irradiance on the plane, the circuit flow and the collector node's step."""
-        mod, smod = c.module(__name__), c.module(sun.__name__)
-        beam, dif, cos_t, S, m, T_sup, Q_loss = (c.var(v) for v in ("G_beam", "G_diffuse", "cos_theta", "S", "m_solar",
-                                                                     "T_sup", "Q_loss"))
+    def _emit_collector(self, c, x, p, sky, on, m_set):
+        """The circuit flow and the collector node's step, under the irradiance sky (sun.emit_plane)."""
+        mod = c.module(__name__)
+        beam, dif, cos_t = sky
+        S, m, T_sup, Q_loss = (c.var(v) for v in ("S", "m_solar", "T_sup", "Q_loss"))
         c.emit("hydraulics",
-               f"{beam}, {dif}, {cos_t} = {smod}.plane(tau + {shift}[0], E_dir, E_dif, {p}[{P.latitude}], "
-               f"{p}[{P.longitude}], {p}[{P.tilt}], {p}[{P.azimuth}], {p}[{P.albedo}])",
                f"{S} = {mod}.absorbed({p}, {beam}, {dif}, {cos_t})",
                f"{m} = min(max({m_set}, 0.0), {p}[{P.m_flow_max}]) if {on} > 0.5 else 0.0",
                f"{T_sup}, {Q_loss} = {mod}.advance(h, {x}, {p}, {S}, T_air, {m})")
