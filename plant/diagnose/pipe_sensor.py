@@ -154,10 +154,13 @@ def _reading(t, fluid, m, mass, decay, T_room):
     out = np.empty(t.size)
     T = fluid[0] if np.isfinite(fluid[0]) else T_room
     out[0] = T
+    dt_kept, kept = math.nan, 1.0
     for k in range(1, t.size):
         dt = t[k] - t[k - 1]
+        if dt != dt_kept:  # a recording's scans are mostly evenly spaced: one exp per spacing
+            dt_kept, kept = dt, math.exp(-dt * decay)
         r = min(1.0, max(m[k], 0.0) * dt / mass) if np.isfinite(fluid[k]) else 0.0
-        T = r * fluid[k] + (1.0 - r) * (T_room + (T - T_room) * math.exp(-dt * decay))
+        T = r * fluid[k] + (1.0 - r) * (T_room + (T - T_room) * kept)
         out[k] = T
     return out
 
