@@ -17,27 +17,33 @@ def n_steps(dt):
 
 
 @njit(cache=True)
-def _plan_span(plan, k, a, b, row, rec):
-    """Append the span a..b (commands of `row`, sample `rec` recorded at its end, -1: none),
-    cut at the last whole minute inside: the profiles (DHW draws, electricity) change on minutes
-    and a step samples them at its start."""
-    m = math.floor(b / 60.0) * 60.0
-    if a + 1e-6 < m < b - 1e-6:
-        plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, m, row, -1
-        k += 1
-        a = m
-    plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, b, row, rec
+def _row(plan, k, a, b, rec):
+    """Row k of a plan: the span a..b as n equal steps of h (n_steps; n = 0 for a span of no
+    length), sample rec (-1: none) recorded at its end. -> k + 1."""
+    n = n_steps(b - a) if b > a else 0
+    plan[k, 0], plan[k, 1], plan[k, 2], plan[k, 3] = a, (b - a) / n if n > 0 else 0.0, n, rec
     return k + 1
 
 
 @njit(cache=True)
-def drive_plan(times, cmd):
-    """The spans [t0, t1, command row, recorded sample or -1] that replay a command table from
-    t = 0: row i holds from sample i to i + 1, a change is applied at the midpoint (the samples
-    cannot tell when it happened)."""
+def _span(plan, k, a, b, rec):
+    """The span a..b, cut at the last whole minute inside: the profiles (DHW draws,
+    electricity) change on minutes and a step samples them at its start."""
+    m = math.floor(b / 60.0) * 60.0
+    if a + 1e-6 < m < b - 1e-6:
+        k = _row(plan, k, a, m, -1)
+        a = m
+    return _row(plan, k, a, b, rec)
+
+
+@njit(cache=True)
+def drive_steps(times, cmd):
+    """The rows (t0, h, n, recorded sample or -1) the generated advance steps through to replay
+    a command table from t = 0: row i of the table holds from sample i to i + 1, a change is
+    applied at the midpoint (the samples cannot tell when it happened)."""
     n = times.shape[0]
     plan = np.empty((4 * n, 4))
-    k = _plan_span(plan, 0, 0.0, times[0], 0, 0)
+    k = _span(plan, 0, 0.0, times[0], 0)
     for i in range(1, n):
         t0, t1 = times[i - 1], times[i]
         same = True
@@ -45,25 +51,12 @@ def drive_plan(times, cmd):
             if cmd[i - 1, j] != cmd[i, j]:
                 same = False
         if same:
-            k = _plan_span(plan, k, t0, t1, i, i)
+            k = _span(plan, k, t0, t1, i)
         else:
             tm = 0.5 * (t0 + t1)
-            k = _plan_span(plan, k, t0, tm, i - 1, -1)
-            k = _plan_span(plan, k, tm, t1, i, i)
+            k = _span(plan, k, t0, tm, -1)
+            k = _span(plan, k, tm, t1, i)
     return plan[:k]
-
-
-@njit(cache=True)
-def drive_steps(times, cmd):
-    """drive_plan's spans as the rows (t0, h, n, recorded sample or -1) the generated advance
-    steps through: n equal steps of h (n_steps), n = 0 for a span of no length."""
-    spans = drive_plan(times, cmd)
-    plan = np.empty((spans.shape[0], 4))
-    for i in range(spans.shape[0]):
-        a, b = spans[i, 0], spans[i, 1]
-        n = n_steps(b - a) if b > a else 0
-        plan[i, 0], plan[i, 1], plan[i, 2], plan[i, 3] = a, (b - a) / n if n > 0 else 0.0, n, spans[i, 3]
-    return plan
 
 
 def run_steps(t0: float, h: float, n: int) -> np.ndarray:
