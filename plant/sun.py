@@ -42,7 +42,7 @@ COS_ZENITH_MIN = math.cos(math.radians(85.0))
 def site(latitude, tilt, azimuth):
     """The plane's fixed trigonometry: (sin, cos) of the latitude, of the tilt and of the azimuth
     from south, for latitude/tilt/azimuth [deg]. A plant computes it once per call of its step
-    loop, not per step: it is four of the eight sines and cosines a step's sun would take."""
+    loop, not per step: three of the eight sine-cosine pairs a step's sun took."""
     phi, beta, gamma = math.radians(latitude), math.radians(tilt), math.radians(azimuth - 180.0)
     return (math.sin(phi), math.cos(phi), math.sin(beta), math.cos(beta), math.sin(gamma), math.cos(gamma))
 
