@@ -56,7 +56,7 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
 _LAB = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)],
         "dhw_storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
 _MIXING = {"switch.storage_inlet_mixing": 0.025}
-_H2 = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
+_H2 = {"storage.sensor_heights": _LAB["storage.sensor_heights"]}  # house 2 has one tank
 DIAGNOSIS_VARIANTS = (
     ("house1 (driven)", "house1", False, {}),
     ("house1 + port mixing", "house1", False, _MIXING),
