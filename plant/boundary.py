@@ -2,6 +2,8 @@
 profile, sampled at the step's local time (the `profiles` kind the compiler always adds)."""
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numba import njit
 
@@ -24,9 +26,11 @@ def sample_all(t, tau0, prof):
             sample(pel, st_pel, False, tau), sample(draw, st_draw, False, tau) * RHO, tau)
 
 
+@lru_cache(maxsize=8)
 def profiles(typeday: int, household_kwh_per_year: float, dhw_litres_per_day: float,
              dhw_series: str = "SF1") -> tuple:
-    """The profile arrays the step samples: ((values...), (steps...))."""
+    """The profile arrays the step samples: ((values...), (steps...)). Built once per set of
+    arguments and shared (the step only reads them): a diagnosis builds a house per replay."""
     if typeday:
         td = loaders.typeday(typeday, household_kwh_per_year, dhw_litres_per_day)
         w, pres, pel, draw = td, td["presence"], td["P_el"], td["draw"]

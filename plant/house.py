@@ -71,7 +71,8 @@ def load_house(name_or_path: str | Path = "house1", start: str | None = None,
         from .fmu.house import FmuHouse
 
         return FmuHouse(load_spec(path, overrides), start=start, controller=controller)
-    return House(declaration.load(path, overrides), start=start, controller=controller)
+    # the document just read is parsed (declaration.load would read it again)
+    return House(declaration.parse(doc, path, path.read_text(), overrides), start=start, controller=controller)
 
 
 class House:

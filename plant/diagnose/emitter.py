@@ -191,11 +191,10 @@ def replay(rec, house: str, overrides: dict, n: int, elements: int | None = None
     runs as `elements` elements in series (None: the kind's default); every element, or the
     floor's node, starts at the first recorded return."""
     from ..component import pack
-    from ..declaration import load
+    from ..declaration import params_of
 
     c = of(house)
-    own = {k: v for k, v in overrides.items() if k.startswith(f"{c.emitter}.")}
-    prm = load(house, own or None).instances[c.emitter].params
+    prm = params_of(house, c.emitter, overrides)
     ret = c.emitter_outputs[0]
     T0 = filled(rec.data[ret][:n])[0]
     T0 = T0 if np.isfinite(T0) else prm.T_init

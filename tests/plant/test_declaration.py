@@ -223,3 +223,22 @@ def test_pressure_driven_hydraulics_name_a_generator_they_cannot_overrun(tmp_pat
     path = _write(tmp_path, text.replace('generators = ["boiler", "chp"]', 'generators = ["chp", "boiler"]'), "pd.toml")
     with pytest.raises(ConfigError, match=r"\[switch\] generators: pressure_driven hydraulics need a second generator .* boiler is a boiler"):
         load_house(path)
+
+
+def test_one_instances_params_are_those_of_the_whole_house_with_its_overrides():
+    """params_of (an emitter replayed alone asks for its own ~800 times per diagnosis) gives the
+    Params the whole declaration gives, overrides of that instance applied and others ignored;
+    a variant file (house1_cut_circuit: base house1) reads through its base."""
+    from plant.declaration import load, params_of
+
+    ov = {"radiator.Q_nominal": 4321.0, "radiator.V_water": 0.05, "storage.UA_loss": 9.0}
+    for house in ("house1", "house1_cut_storage", "house2"):
+        for name in load(house).instances:
+            whole = load(house, ov).instances[name].params
+            if whole is not None:
+                assert params_of(house, name, ov) == whole, (house, name)
+    assert params_of("house1", "radiator", ov).Q_nominal == 4321.0
+    with pytest.raises(ConfigError, match=r"\[radiator\] Q_nominal = -1.0: out of range"):
+        params_of("house1", "radiator", {"radiator.Q_nominal": -1.0})
+    with pytest.raises(ConfigError, match="no instance 'radiatr'"):
+        params_of("house1", "radiatr")
