@@ -12,6 +12,7 @@ earlier time than requested.
 from __future__ import annotations
 
 import socket
+import time
 
 from plant.errors import TwinError
 
@@ -19,6 +20,12 @@ OFFSET = 1e-3  # s: the grid's grants trail the houses' by this much
 # Fifty house processes starting on two cores keep a core from answering for tens of seconds:
 # HELICS' defaults (30 s to connect, a peer silent for two 5 s ticks is lost) are too tight there.
 TIMEOUTS = "--timeout=120s --tick=20s"
+# A federate's core binds a port the broker hands it; when another process holds that port (any
+# TCP client's source port comes from the same range) the core gives up at once ("Unable to
+# connect to broker->unable to register federate": once in ~25 runs of the test suite, where
+# other tests open connections meanwhile). A new core asks the broker for another port.
+JOIN_ATTEMPTS = 5
+JOIN_PAUSE = 1.0  # s between attempts
 
 
 def _h():
@@ -77,8 +84,17 @@ class Federate:
         h.helicsFederateInfoSetFlagOption(info, h.HELICS_FLAG_UNINTERRUPTIBLE, True)
         h.helicsFederateInfoSetFlagOption(info, h.HELICS_FLAG_TERMINATE_ON_ERROR, True)
         self.name = name
-        self._f = h.helicsCreateValueFederate(name, info)
-        h.helicsFederateInfoFree(info)
+        try:
+            for attempt in range(1, JOIN_ATTEMPTS + 1):
+                try:
+                    self._f = h.helicsCreateValueFederate(name, info)
+                    break
+                except h.HelicsException as exc:
+                    if attempt == JOIN_ATTEMPTS or "unable to register federate" not in str(exc):
+                        raise
+                    time.sleep(JOIN_PAUSE)
+        finally:
+            h.helicsFederateInfoFree(info)
 
     def publication(self, key: str, units: str = ""):
         return _h().helicsFederateRegisterGlobalTypePublication(self._f, key, "vector", units)

@@ -199,3 +199,32 @@ def test_two_hosts_share_a_district_through_the_broker_address_only(tmp_path):
     col = grid.names.index
     M = grid.values[:, col("house2.M_extracted")].sum() + grid.values[:, col("house2.M_fed_in")].sum()
     assert M == pytest.approx(h2["substation.M_extracted"] + h2["substation.M_fed_in"], rel=1e-4)
+
+
+def test_a_federate_whose_port_is_taken_joins_on_another(monkeypatch):
+    """The broker hands each federate's core a port of its own (a zmq broker at port P: P + 5,
+    P + 6, ... in turn); when another process holds it the core gives up at once ("unable to
+    register federate", seen once in ~25 suite runs). With one attempt that is the error; with
+    the engine's attempts the federate asks again and joins."""
+    import socket
+
+    broker = engine.Broker(2)
+    held = [socket.socket(), socket.socket()]
+    pauses = []
+    try:
+        for k, s in enumerate(held):
+            s.bind(("127.0.0.1", broker.port + 5 + k))
+            s.listen()
+        monkeypatch.setattr(engine, "JOIN_ATTEMPTS", 1)
+        with pytest.raises(Exception, match="unable to register federate"):
+            engine.Federate("alone", broker.address, 60.0)        # handed P + 5
+        monkeypatch.undo()
+        sleep = engine.time.sleep
+        monkeypatch.setattr(engine.time, "sleep", lambda s: (pauses.append(s), sleep(s)))
+        fed = engine.Federate("again", broker.address, 60.0)      # P + 6 refused, then joined
+        assert 1 <= len(pauses) < engine.JOIN_ATTEMPTS and set(pauses) == {engine.JOIN_PAUSE}
+        fed.close()
+    finally:
+        for s in held:
+            s.close()
+        broker.close(wait_ms=100)
