@@ -111,7 +111,7 @@ from numba import njit
 
 from ..component import indices, param
 from ..water import CP, RHO
-from .storage_flows import flowing, port_layer
+from .storage_flows import flowing, port_layer, worst_outflow
 
 K_WATER = 0.6  # W/(m K), still-water conductivity used for the default UA_layer
 COURANT_MAX = 0.5  # per-substep bound on (outflow Courant number + conduction/coil number)
@@ -205,30 +205,7 @@ def n_substeps(dt, T, p, in_layer, in_m, out_layer, out_m, coil_UA, coil_m, coil
             nseg = abs(coil_bot[c] - coil_top[c]) + 1
             eps = 1.0 - math.exp(-coil_UA[c] / nseg / (m * CP))
             g += eps * m * CP
-    # largest mass leaving one layer per second (ports + interfaces)
-    worst = 0.0
-    F_above = 0.0
-    nin = in_layer.shape[0]
-    nout = out_layer.shape[0]
-    for k in range(N):
-        net = 0.0
-        outk = 0.0
-        for i in range(nin):
-            if in_layer[i] == k:
-                net += in_m[i]
-        for j in range(nout):
-            if out_layer[j] == k:
-                net -= out_m[j]
-                outk += out_m[j]
-        F = F_above + net if k < N - 1 else 0.0
-        if F > 0.0:
-            outk += F
-        if F_above < 0.0:
-            outk -= F_above
-        if outk > worst:
-            worst = outk
-        F_above = F
-    rate = worst / mL + (2.0 * ua + p[P.UA_loss] / N + g) / C
+    rate = worst_outflow(N, in_layer, in_m, out_layer, out_m) / mL + (2.0 * ua + p[P.UA_loss] / N + g) / C
     x = dt * rate / COURANT_MAX
     n = int(math.ceil(x))
     return n if n >= 1 else 1
