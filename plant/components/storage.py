@@ -111,7 +111,7 @@ from numba import njit
 
 from ..component import indices, param
 from ..water import CP, RHO
-from .storage_flows import flowing, port_layer, worst_outflow
+from .storage_flows import flowing, next_port_layer, port_layer, worst_outflow
 
 K_WATER = 0.6  # W/(m K), still-water conductivity used for the default UA_layer
 COURANT_MAX = 0.5  # per-substep bound on (outflow Courant number + conduction/coil number)
@@ -280,13 +280,16 @@ def _interfaces(T, q_layer, ua, kind, hm, in_layer, in_m, out_layer, out_m):
     q_layer."""
     N = T.shape[0]
     F = 0.0
+    nxt = next_port_layer(-1, N, in_layer, out_layer)
     for k in range(N - 1):
-        for i in range(in_layer.shape[0]):
-            if in_layer[i] == k:
-                F += in_m[i]
-        for j in range(out_layer.shape[0]):
-            if out_layer[j] == k:
-                F -= out_m[j]
+        if k == nxt:  # only a port layer changes the flow its faces carry
+            for i in range(in_layer.shape[0]):
+                if in_layer[i] == k:
+                    F += in_m[i]
+            for j in range(out_layer.shape[0]):
+                if out_layer[j] == k:
+                    F -= out_m[j]
+            nxt = next_port_layer(k, N, in_layer, out_layer)
         flux = ua * (T[k] - T[k + 1])
         if F > 0.0:
             TU = T[k]

@@ -10,7 +10,8 @@ the same flow (only the sign of a zero flow could differ, and a zero flow is tes
 comparisons with 0.0 alone); the flowing ports keep their order, so every sum adds the same
 terms in the same order. The kept ports go into scratch arrays the plant allocates once (two
 arrays allocated per call were an eighth of a small plant's step). The substep count's largest
-outflow, for the same reason, visits the layers port layer by port layer (worst_outflow).
+outflow and the advection's face flows, for the same reason, change at port layers only
+(worst_outflow, next_port_layer): the layers between are not scanned for ports.
 """
 from __future__ import annotations
 
@@ -47,21 +48,14 @@ def worst_outflow(N, in_layer, in_m, out_layer, out_m):
     """The largest mass flow [kg/s] leaving one of N layers (ports and faces), the face flows
     summed downward from the top. Between two port layers every face carries the same flow, so
     the layers are visited port layer by port layer (a few ports: a few visits, not N): each
-    value is the one the layer-by-layer sum gives, to the last bit (tests/plant/test_storage.py).
-    It was a third of a storage's step."""
+    value is the one the layer-by-layer sum gives, to the last bit (tests/plant/test_storage.py)."""
     nin = in_layer.shape[0]
     nout = out_layer.shape[0]
     worst = 0.0
     F_above = 0.0
     k = -1
     while k < N - 1:
-        nxt = N - 1  # the bottom layer is visited whatever: no face below it
-        for i in range(nin):
-            if k < in_layer[i] < nxt:
-                nxt = in_layer[i]
-        for j in range(nout):
-            if k < out_layer[j] < nxt:
-                nxt = out_layer[j]
+        nxt = min(next_port_layer(k, N, in_layer, out_layer), N - 1)  # the bottom layer: no face below
         if nxt > k + 1:  # layers without a port: each passes on the face flow above it
             F = F_above + 0.0
             outk = 0.0
@@ -91,3 +85,16 @@ def worst_outflow(N, in_layer, in_m, out_layer, out_m):
             worst = outk
         F_above = F
     return worst
+
+
+@njit(cache=True, inline="always")
+def next_port_layer(k, N, in_layer, out_layer):
+    """The first layer below layer k that has a port; N when none."""
+    nxt = N
+    for i in range(in_layer.shape[0]):
+        if k < in_layer[i] < nxt:
+            nxt = in_layer[i]
+    for j in range(out_layer.shape[0]):
+        if k < out_layer[j] < nxt:
+            nxt = out_layer[j]
+    return nxt
