@@ -58,13 +58,9 @@ def worst_outflow(N, in_layer, in_m, out_layer, out_m):
         nxt = min(next_port_layer(k, N, in_layer, out_layer), N - 1)  # the bottom layer: no face below
         if nxt > k + 1:  # layers without a port: each passes on the face flow above it
             F = F_above + 0.0
-            outk = 0.0
-            if F > 0.0:
-                outk += F
-            if F_above < 0.0:
-                outk -= F_above
-            if outk > worst:
-                worst = outk
+            out = _leaving(0.0, F, F_above)
+            if out > worst:  # (a NaN flow's outflow is never the largest)
+                worst = out
             F_above = F
         k = nxt
         net = 0.0
@@ -77,14 +73,22 @@ def worst_outflow(N, in_layer, in_m, out_layer, out_m):
                 net -= out_m[j]
                 outk += out_m[j]
         F = F_above + net if k < N - 1 else 0.0
-        if F > 0.0:
-            outk += F
-        if F_above < 0.0:
-            outk -= F_above
-        if outk > worst:
-            worst = outk
+        out = _leaving(outk, F, F_above)
+        if out > worst:
+            worst = out
         F_above = F
     return worst
+
+
+@njit(cache=True, inline="always")
+def _leaving(outk, F, F_above):
+    """What leaves a layer: its ports' outflow outk, the face below when it flows down (F > 0),
+    the face above when it flows up (F_above < 0)."""
+    if F > 0.0:
+        outk += F
+    if F_above < 0.0:
+        outk -= F_above
+    return outk
 
 
 @njit(cache=True, inline="always")
