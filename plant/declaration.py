@@ -263,11 +263,10 @@ def load(name_or_path: str | Path, overrides: dict | None = None) -> Declaration
     return parse(read(path), path, path.read_text(), overrides)
 
 
-
 def params_of(name_or_path: str | Path, instance: str, overrides: dict | None = None):
     """The Params of one instance exactly as load(name_or_path, overrides) gives them, without
     building and checking the rest of the house: an emitter replayed alone asks for its own
-    ~800 times per diagnosis, and parsing the whole house was two thirds of each replay.
+    ~800 times per diagnosis (loading the whole house for them was about 1 ms of each 4-5 ms replay).
     overrides: {"instance.key": value}; those of other instances are ignored. Values that give no
     Params (out of range, not a number) raise a ConfigError naming them."""
     path = resolve(name_or_path)
@@ -278,6 +277,8 @@ def params_of(name_or_path: str | Path, instance: str, overrides: dict | None = 
     _apply_overrides(doc, own, [])
     problems: list[str] = []
     inst = _instance(instance, doc[instance], 0, path, path.read_text(), problems)
-    if inst is None or inst.params is None:
-        raise ConfigError("\n".join(problems) or f"{path} [{instance}]: a {inst.kind} has no parameters")
+    if problems and (inst is None or inst.params is None):
+        raise ConfigError("\n".join(problems))
+    if inst.params is None:
+        raise ConfigError(f"{path} [{instance}]: a {inst.kind} has no parameters")
     return inst.params

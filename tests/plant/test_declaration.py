@@ -228,7 +228,7 @@ def test_pressure_driven_hydraulics_name_a_generator_they_cannot_overrun(tmp_pat
 def test_one_instances_params_are_those_of_the_whole_house_with_its_overrides():
     """params_of (an emitter replayed alone asks for its own ~800 times per diagnosis) gives the
     Params the whole declaration gives, overrides of that instance applied and others ignored;
-    a variant file (house1_cut_circuit: base house1) reads through its base."""
+    a variant file (house1_cut_storage: base house1) reads through its base."""
     from plant.declaration import load, params_of
 
     ov = {"radiator.Q_nominal": 4321.0, "radiator.V_water": 0.05, "storage.UA_loss": 9.0}
