@@ -46,6 +46,7 @@ else its command) switches: there the sample's instant within the interval is un
 """
 from __future__ import annotations
 
+import hashlib
 import math
 from typing import NamedTuple
 
@@ -65,6 +66,7 @@ TAU_GRID = np.concatenate([[AS_SIMULATED], np.geomspace(*TAU_RANGE, 14), [np.inf
 # (at 60 s samples a flow of 0.017 ... 17 g/s renews it within a sample)
 MASS_RANGE = (1e-3, 1.0)
 MASS_GRID = np.geomspace(*MASS_RANGE, 7)
+GRID_DECAYS = np.array([0.0 if math.isinf(tau) else 1.0 / tau for tau in TAU_GRID[1:]])  # 1 / tau
 T_PLANT_ROOM_DEFAULT = 20.0    # degC, when the replayed house has no storage stating T_env
 ROOM_RANGE = (5.0, 35.0)       # degC: what a pipe may cool toward (a plant room, a cellar, a loft)
 ROOM_AFTER = 6 * 3600.0        # s of recorded standstill after which a pipe reads its room (5 tau at
@@ -167,12 +169,73 @@ def _reading(t, fluid, m, mass, decay, T_room):
 
 @njit(cache=True)
 def _squares(t, fluid, meas, m, mass, decay, T_room, idx, out):
-    """out[i] = (meas - reading)^2 at sample idx[i], 0 where NaN (np.nansum's NaN); -> out."""
-    y = _reading(t, fluid, m, mass, decay, T_room)
-    for i in range(idx.size):
-        d = meas[idx[i]] - y[idx[i]]
+    """out[i] = (meas - reading)^2 at sample idx[i] (increasing), 0 where NaN (np.nansum's NaN);
+    -> out. The reading of _reading, step for step, scored as it goes: no reading array, and
+    nothing after the last scored sample."""
+    T = fluid[0] if np.isfinite(fluid[0]) else T_room
+    i = 0
+    if idx.size and idx[0] == 0:
+        d = meas[0] - T
         v = d * d
-        out[i] = v if v == v else 0.0
+        out[0] = v if v == v else 0.0
+        i = 1
+    dt_kept, kept = math.nan, 1.0
+    for k in range(1, idx[idx.size - 1] + 1 if idx.size else 0):
+        dt = t[k] - t[k - 1]
+        if dt != dt_kept:
+            dt_kept, kept = dt, math.exp(-dt * decay)
+        r = min(1.0, max(m[k], 0.0) * dt / mass) if np.isfinite(fluid[k]) else 0.0
+        T = r * fluid[k] + (1.0 - r) * (T_room + (T - T_room) * kept)
+        if k == idx[i]:
+            d = meas[k] - T
+            v = d * d
+            out[i] = v if v == v else 0.0
+            i += 1
+    return out
+
+
+@njit(cache=True)
+def _grid_squares(t, fluid, meas, m, masses, decays, T_room, idx, out):
+    """_squares for every (decay, mass) pair at once: out[a, b, i] for decays[a], masses[b]. The
+    readings of the pairs are independent chains, one pass over the samples advances them all
+    (one pair's chain waits on its own previous value; many keep the processor busy); each is
+    computed step for step as in _squares, so every square is the same to the last bit. -> out."""
+    na, nb = decays.size, masses.size
+    nc = na * nb
+    flat = out.reshape(nc, idx.size)
+    T0 = fluid[0] if np.isfinite(fluid[0]) else T_room
+    T = np.full(nc, T0)
+    kept = np.ones(nc)   # the chains' exp(-dt / tau), their r: pair c = a * nb + b
+    r = np.empty(nc)
+    i = 0
+    if idx.size and idx[0] == 0:
+        d = meas[0] - T0
+        v = d * d
+        flat[:, 0] = v if v == v else 0.0
+        i = 1
+    dt_kept = math.nan
+    for k in range(1, idx[idx.size - 1] + 1 if idx.size else 0):
+        dt = t[k] - t[k - 1]
+        if dt != dt_kept:
+            dt_kept = dt
+            for a in range(na):
+                e = math.exp(-dt * decays[a])
+                for b in range(nb):
+                    kept[a * nb + b] = e
+        finite = np.isfinite(fluid[k])
+        for b in range(nb):
+            rb = min(1.0, max(m[k], 0.0) * dt / masses[b]) if finite else 0.0
+            for a in range(na):
+                r[a * nb + b] = rb
+        f = fluid[k]
+        for c in range(nc):
+            T[c] = r[c] * f + (1.0 - r[c]) * (T_room + (T[c] - T_room) * kept[c])
+        if k == idx[i]:
+            for c in range(nc):
+                d = meas[k] - T[c]
+                v = d * d
+                flat[c, i] = v if v == v else 0.0
+            i += 1
     return out
 
 
@@ -218,13 +281,32 @@ def _fit(t, m, use, T_room, pairs) -> PipeFit:
     """The (tau, mass) grid's best, refined around it on log scales when finite (a continuous fit:
     a grid step would make every replay's cost jump with it): tau alone by Brent within its grid
     neighbours where the pipe only runs or stands, else both together (Nelder-Mead, within the
-    ranges: the two trade off, and one at a time stops short)."""
+    ranges: the two trade off, and one at a time stops short). The same inputs give the fit kept
+    from before (_FITS)."""
     # the reading is causal: the samples after the last one scored change no cost. The cost is
     # asked for a few hundred times per replay, so its arrays are prepared once
     end = int(np.flatnonzero(use)[-1]) + 1
     tf, mf, used = np.asarray(t[:end], float), np.nan_to_num(np.asarray(m[:end], float)), use[:end]
     prepared = [(np.asarray(y[:end], float), np.asarray(y_m[:end], float)) for y, y_m in pairs]
+    key = hashlib.blake2b(repr(float(T_room)).encode())
+    for a in (tf, mf, used, *(a for pair in prepared for a in pair)):
+        key.update(np.ascontiguousarray(a).view(np.uint8))
+    key = key.digest()
+    if key not in _FITS:
+        if len(_FITS) >= FITS_KEPT:
+            del _FITS[next(iter(_FITS))]
+        _FITS[key] = _fit_new(tf, mf, used, T_room, prepared)
+    return _FITS[key]
 
+
+# fits by their inputs' digest: a replay whose branch fluid and flow did not change (a candidate
+# on another part of the plant) gets the fit made before (rigsim house 2's 7-day null case: 1,043
+# of 3,228 fits, mostly of branches that only stand, the cheap ones)
+FITS_KEPT = 256
+_FITS: dict = {}
+
+
+def _fit_new(tf, mf, used, T_room, prepared) -> PipeFit:
     idx = np.flatnonzero(used)
     scratch = np.empty(idx.size)
 
@@ -237,9 +319,16 @@ def _fit(t, m, use, T_room, pairs) -> PipeFit:
         return sum(float(_squares(tf, y, y_m, mf, float(mass), decay, float(T_room), idx, scratch).sum())
                    for y, y_m in prepared)
 
-    moves = bool((m[use] > 0).any())   # a mass matters only where the pipe trickles
+    moves = bool((mf[used] > 0).any())   # a mass matters only where the pipe trickles
     masses = MASS_GRID if moves else MASS_GRID[:1]
-    costs = np.array([[sse(tau, mass) for mass in masses] for tau in TAU_GRID])
+    # the grid's costs, sse's to the last bit: AS_SIMULATED's (one value: no mass), then the
+    # other taus' squares in one compiled pass per sensor, each (tau, mass) row summed as sse sums it
+    costs = np.empty((TAU_GRID.size, masses.size))
+    costs[0] = sse(AS_SIMULATED, masses[0])
+    costs[1:] = 0.0
+    squares = np.empty((GRID_DECAYS.size, masses.size, idx.size))
+    for y, y_m in prepared:
+        costs[1:] += _grid_squares(tf, y, y_m, mf, masses, GRID_DECAYS, float(T_room), idx, squares).sum(axis=2)
     k, j = np.unravel_index(int(np.argmin(costs)), costs.shape)
     tau, mass = float(TAU_GRID[k]), float(masses[j])
     if tau == AS_SIMULATED:
