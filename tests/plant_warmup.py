@@ -11,8 +11,8 @@ compiled once, in a pool of processes, while the workers collect the tests
 load of ~1 s.
 
 After the shipped houses, the same pool compiles the variants the diagnoses of house-1 and house-2
-recordings replay (DIAGNOSIS_VARIANTS: the derived circuit cut with the twin's or the lab's sensor
-heights, each with and without the re-fit's port mixing, and house 1 whole with it), with the
+recordings replay (DIAGNOSIS_VARIANTS: the derived circuit cut, with and without the re-fit's port
+mixing, at whatever sensor heights a columns file gives, and house 1 whole with it), with the
 replay's `drive`: a dozen diagnosis tests need them, and both workers would otherwise compile the
 same ones side by side when the diagnosis files start.
 """
@@ -47,29 +47,22 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
 
 
 # (label, house, cut, overrides that change the generated plant): what a diagnosis loads besides the
-# file's plant (cut: the house's derived circuit cut, plant/diagnose/derive.py). Heights and the
-# mixing volumes are parameters of the step (any values give the same plant); given at all they
-# compile another: sensors read at heights (a columns file's), and an inflow spread beyond its port
-# layer (calibration.NOMINAL_REFIT's switch.storage_inlet_mixing, house 2's heating branch too).
-# House 2's are those of its rig recording (tests/diagnose/test_any_house.py), found by loading
-# every plant a diagnosis of it replays.
-_LAB = {"storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)],
-        "dhw_storage.sensor_heights": [(k - 0.5) / 10 for k in range(1, 11)]}
+# file's plant (cut: the house's derived circuit cut, plant/diagnose/derive.py). An inflow spread
+# beyond its port layer (calibration.NOMINAL_REFIT's switch.storage_inlet_mixing, house 2's heating
+# branch too) compiles another plant; sensor heights (a columns file's) are parameters of the step
+# and compile none, so a plant read at the lab's or the rig's sensors is the one listed here.
+# House 2's are those its rig recording replays (tests/diagnose/test_any_house.py), found by
+# loading every plant a diagnosis of it replays.
 _MIXING = {"switch.storage_inlet_mixing": 0.025}
-_H2 = {"storage.sensor_heights": _LAB["storage.sensor_heights"]}  # house 2 has one tank
 DIAGNOSIS_VARIANTS = (
     ("house1 (driven)", "house1", False, {}),
     ("house1 + port mixing", "house1", False, _MIXING),
     ("house1 cut", "house1", True, {}),
     ("house1 cut + port mixing", "house1", True, _MIXING),
-    ("house1 cut at the lab's sensors", "house1", True, _LAB),
-    ("house1 cut at the lab's sensors + port mixing", "house1", True, {**_LAB, **_MIXING}),
-    ("house2 cut at the rig's sensors", "house2", True, _H2),
-    ("house2 cut at the rig's sensors + port mixing", "house2", True, {**_H2, **_MIXING}),
-    ("house2 cut at the rig's sensors + heating port mixing", "house2", True,
-     {**_H2, "heating.storage_inlet_mixing": 0.025}),
-    ("house2 cut at the rig's sensors + both port mixings", "house2", True,
-     {**_H2, **_MIXING, "heating.storage_inlet_mixing": 0.025}),
+    ("house2 cut", "house2", True, {}),
+    ("house2 cut + port mixing", "house2", True, _MIXING),
+    ("house2 cut + heating port mixing", "house2", True, {"heating.storage_inlet_mixing": 0.025}),
+    ("house2 cut + both port mixings", "house2", True, {**_MIXING, "heating.storage_inlet_mixing": 0.025}),
 )
 
 

@@ -102,11 +102,10 @@ class Kind(ComponentKind):
         for i in range(1, n + 1):
             c.signal(inst, f"T_sensor_{i}", "degC", "output", f"sensor {i} of {n} (1 = bottom, {n} = top)")
         first = c.signal_index(f"{inst.name}.T_sensor_1")
-        mod = c.module(__name__)
-        if heights is None:
-            read = f"{mod}.sensors({x}, s, {first}, {n})"
-        else:
-            read = f"{mod}.sensors_at({x}, s, {first}, {c.param(inst, np.array(heights, dtype=float), suffix='_z')})"
+        # the heights are a parameter of the step, the equally spaced ones (sensors' (k + 0.5) / n) too:
+        # a plant read at a columns file's heights is the same compiled plant as the house file's
+        z = np.array(heights if heights is not None else [(k + 0.5) / n for k in range(n)], dtype=float)
+        read = f"{c.module(__name__)}.sensors_at({x}, s, {first}, {c.param(inst, z, suffix='_z')})"
         c.emit("sense", read)
         lag_call = self._lag(c, inst, n, first)
         if lag_call:

@@ -298,6 +298,26 @@ def test_layer_counts_share_one_compiled_plant_and_keep_their_own_states():
         assert np.all(np.isfinite(T)) and np.ptp(T) > 1.0   # still stratified, top to bottom
 
 
+def test_sensor_heights_share_the_compiled_plant_and_read_where_they_are_placed():
+    """A columns file's sensor heights (a diagnosis's override) are a parameter of the step: the
+    plant read at them is the house file's compiled plant, and each sensor reads the tank's
+    profile at its own height, the equally spaced ones included."""
+    from plant.components.storage_kind import _at
+    from plant.house import load_house
+
+    z = [0.03, 0.12, 0.2, 0.33, 0.41, 0.5, 0.64, 0.7, 0.86, 0.97]
+    plain = load_house("house1", start="2021-01-10")
+    placed = load_house("house1", start="2021-01-10", overrides={"storage.sensor_heights": z})
+    assert placed._plant.module is plain._plant.module
+    for h, heights in ((plain, [(k + 0.5) / 10 for k in range(10)]), (placed, z)):
+        for _ in range(120):
+            h.step(60.0)
+        T = h.state("storage")
+        got = [h.get(f"storage.T_sensor_{k}") for k in range(1, 11)]
+        assert got == [_at(T, zk) for zk in heights]
+        assert len(set(got)) > 5   # a stratified tank: the heights matter
+
+
 def _worst_layer_by_layer(N, in_layer, in_m, out_layer, out_m):
     """The storage's largest outflow as first written: every layer, its ports summed in order."""
     worst, F_above = 0.0, 0.0
