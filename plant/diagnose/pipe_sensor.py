@@ -307,6 +307,7 @@ _FITS: dict = {}
 
 
 def _fit_new(tf, mf, used, T_room, prepared) -> PipeFit:
+    """_fit's search on its prepared arrays (cut at the last scored sample)."""
     idx = np.flatnonzero(used)
     scratch = np.empty(idx.size)
 
