@@ -35,19 +35,20 @@ from .emitter import filled, of as circuit_of
 from .roles import of as roles_of
 
 
-def circuit_cut(house) -> DerivedCut:
+def circuit_cut(house, generators=()) -> DerivedCut:
     """The cut a recording that measures the heating circuits and hot-water draws is replayed
-    on: `house` cut at its circuits' building side (derive.py)."""
-    return derive(house, "circuit")
+    on: `house` cut at its circuits' building side (derive.py), and at the measured outlets of
+    `generators`."""
+    return derive(house, "circuit", generators)
 
 
-def select(rec, house: str, required: bool = False):
+def select(rec, house: str, required: bool = False, generators=()):
     """The cut whose recorded signals the recording holds (None: the whole house), and whether
     the mixing station can be replayed alone. required: a recording that allows no cut is an
     error naming what the cut lacks (the whole house would replay on the twin's own building and
-    profiles)."""
+    profiles). generators: also cut at those generators' measured outlets (outlet_cuttable)."""
     try:
-        cut = circuit_cut(house)
+        cut = circuit_cut(house, generators)
     except ConfigError as exc:
         if required:
             raise ConfigError(f"{rec.source}: the house cannot be cut: {exc}") from None
@@ -63,6 +64,14 @@ def select(rec, house: str, required: bool = False):
     c = circuit_of(house)
     circuit = c is not None and c.station in cut.removes and all(rec.has(s) for s in c.station_inputs)
     return cut, circuit
+
+
+def outlet_cuttable(rec, unit: str) -> bool:
+    """Whether the recording measures a generator's outlet temperature and flow, so that a cut
+    can put them where the generator was (derive.OUTLET)."""
+    from .derive import OUTLET
+
+    return all(rec.has(f"{unit}.{recorded}") for _, recorded in OUTLET)
 
 
 def emitter_alone(rec, cut, house) -> bool:

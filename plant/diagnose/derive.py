@@ -54,6 +54,8 @@ SIDES = {
                    "profiles are outside the replayed plant"),
 }
 STATION, DRAW = "mixing_station", "dhw_draw"
+# a generator cut at its measured outlet (plant/connections/measured.py): input local -> recorded local
+OUTLET = (("m_flow", "m_flow"), ("T_sup", "T_sup"))
 
 
 @dataclass(frozen=True)
@@ -65,11 +67,13 @@ class DerivedCut:
     tables: dict           # instance -> its table in the variant (the measured boundaries)
     bindings: dict         # input of the cut house -> the recorded signal it follows
     why: str
+    generators: tuple = ()  # generators replayed from their measured outlet and flow
 
     @property
     def label(self) -> str:
-        """The name a shipped cut of this house would have (house1_cut_circuit)."""
-        return f"{self.house.stem}_cut_{self.name}"
+        """The name a shipped cut of this house would have (house1_cut_circuit; with a generator
+        at its measured outlet: house1_cut_circuit_boiler)."""
+        return f"{self.house.stem}_cut_{self.name}" + "".join(f"_{g}" for g in self.generators)
 
     def missing(self, has: Callable[[str], bool]) -> list[str]:
         """The recorded signals this cut follows that a recording lacks."""
@@ -98,10 +102,12 @@ class DerivedCut:
         return path
 
 
-def derive(house, name: str = "circuit") -> DerivedCut:
+def derive(house, name: str = "circuit", generators=()) -> DerivedCut:
     """The cut of `house` (a name or a house file) at every heating circuit's `name` side
-    (SIDES) and every hot-water draw. A house with no mixing station, or one whose remaining
-    instances name a removed one, cannot be cut: a ConfigError says which and why."""
+    (SIDES) and every hot-water draw, and at the outlet of each of `generators` (its measured
+    flow and outlet temperature in its place: the unit is run otherwise than the twin's model of
+    it runs, unit_modes.py). A house with no mixing station, or one whose remaining instances
+    name a removed one, cannot be cut: a ConfigError says which and why."""
     if name not in SIDES:
         raise ConfigError(f"cut {name!r}: unknown; cuts: {', '.join(SIDES)}")
     side = SIDES[name]
@@ -126,6 +132,15 @@ def derive(house, name: str = "circuit") -> DerivedCut:
         removes.append(d.name)
         tables[d.name] = {"kind": "measured_draw", **{k: v for k, v in doc[d.name].items() if k != "kind"}}
         bindings[f"{d.name}.m_flow_hot"] = f"{d.name}.m_flow_hot"
+    for g in generators:
+        if g not in inst or KINDS[inst[g].kind].role != "generator":
+            raise ConfigError(f"{spec.path}: {g!r} is no generator of {spec.name}; a cut replaces a generator "
+                              "by its measured outlet and flow")
+        written = [str(v).split(".", 1)[1] for i in inst.values() if KINDS[i.kind].role == "controller"
+                   for v in (i.options.get("outputs") or {}).values() if str(v).split(".", 1)[0] == g]
+        removes.append(g)
+        tables[g] = {"kind": "measured_generator", "commands": list(dict.fromkeys(written))}
+        bindings.update({f"{g}.{local}": f"{g}.{rec}" for local, rec in OUTLET})
     gone = set(removes) - set(tables)
     for i in inst.values():
         if i.name in removes:
@@ -136,7 +151,8 @@ def derive(house, name: str = "circuit") -> DerivedCut:
                 raise ConfigError(f"{i.at(k)}: names {', '.join(sorted(named))}, which the cut at the {name} removes "
                                   f"(with {', '.join(st.name for st in stations)}); a recording of this house is "
                                   "replayed whole")
-    return DerivedCut(name, spec.path, spec.name, tuple(removes), tables, bindings, side.words)
+    why = side.words + "".join(f"; {g} replayed from its measured outlet temperature and flow" for g in generators)
+    return DerivedCut(name, spec.path, spec.name, tuple(removes), tables, bindings, why, tuple(generators))
 
 
 def _named(value) -> set:

@@ -1,6 +1,9 @@
 """The diagnosis as stages, each a function of its inputs that returns an immutable value:
 
-    prepare -> calibrate -> locate_mismatch -> fit_candidates -> select -> build_report
+    prepare -> outlets -> calibrate -> locate_mismatch -> fit_candidates -> select -> build_report
+
+(outlets: the generators the recording runs otherwise than the twin's model of them, replayed
+from their measured outlets; prepare runs again with them when there are any.)
 
 No stage changes what an earlier one returned: a calibration gives a new replayer
 (Replayer.with_calibration), the nominal replay a new context (Context.with_baseline), the unit
@@ -12,6 +15,7 @@ import time
 from dataclasses import dataclass
 
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, requirements, search, unit_modes
+from . import cut as cut_mod
 from . import unrepresented
 from . import report as report_mod
 from . import verdict as verdict_mod
@@ -64,12 +68,18 @@ class Selection:
     terms: tuple                # search.search's regression terms
 
 
-def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
-    """Check the recording, choose the replayed plant (a cut where it measures enough), frame the
-    training and held-out windows."""
+def prepare(rec, house: str, train_days: float, require_cut: bool, generators: dict | None = None) -> Prepared:
+    """Check the recording, choose the replayed plant (a cut where it measures enough; with the
+    `generators` given at their measured outlets: outlets), frame the training and held-out
+    windows."""
     requirements.check_house(house)
     warnings = list(rec.warnings) + requirements.check(rec, house)
-    rp = replay.Replayer(rec, house, require_cut=require_cut)
+    rp = replay.Replayer(rec, house, require_cut=require_cut, generators=tuple(generators or ()))
+    for unit, m in (generators or {}).items():
+        warnings.append(f"{unit}: the recording runs it otherwise than the twin's model of it does (their running "
+                        f"states differ at {100 * m['share_of_running']:.0f} % of its running samples, more than "
+                        f"unit_modes.MAX_SHARE {100 * unit_modes.MAX_SHARE:.0f} %): replayed from its measured outlet "
+                        "temperature and flow, and no effect on it is judged")
     simulated = rp.simulated
     for unit, runs in rp.unfollowed.items():
         # the twin's own control runs it (Replayer); its signals, sampled between pulses, are not
@@ -81,6 +91,21 @@ def prepare(rec, house: str, train_days: float, require_cut: bool) -> Prepared:
                         f"faster, or as a run-time count)")
     ctx = Context.build(rec, train_days=train_days, simulated=simulated, roles=rp.roles)
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
+
+
+def outlets(p: Prepared) -> dict:
+    """{generator: its unit_modes entry} for the generators to replay from their measured outlet
+    temperature and flow: those whose running state in the file-valued nominal replay differs
+    from the recording's at more than unit_modes.MAX_SHARE of their running samples (run
+    otherwise than the twin's model runs: a boiler cycling on its own limits), where the recording
+    measures that outlet and the replay is on a cut. Their heat then reaches the storage as the
+    lab's did, and the effects left to judge are those of the rest of the plant."""
+    rp, rec = p.replayer, p.ctx.rec
+    units = [u for u in rp.roles.ran if cut_mod.outlet_cuttable(rec, u)]
+    if rp.cut is None or not units:
+        return {}
+    modes = unit_modes.identify(rec, rp.run().rows, p.ctx.index, {u: rp.roles.ran[u] for u in units})
+    return {u: unit_modes.public({u: m})[u] for u, m in modes.items() if unit_modes.run_otherwise(m)}
 
 
 def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | None = 1) -> Baseline:
@@ -133,6 +158,7 @@ def locate_mismatch(b: Baseline) -> Location:
     ctx, rp, sim0 = b.ctx, b.replayer, b.ctx.nominal_sim
     affected = locate.mismatched_signals(ctx, sim0, ctx.held)
     summary = {"replay": {"plant": rp.plant_label, "cut": rp.cut.name if rp.cut else None,
+                          "generators_at_measured_outlet": list(rp.cut.generators) if rp.cut else [],
                           "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit,
                           "emitter_alone": rp.emitter},
                "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
@@ -233,7 +259,12 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     recording that allows no cut (cut.select)."""
     timing = {}
     t0 = time.perf_counter()
-    base = calibrate(prepare(rec, house, train_days, require_cut), house, refit_nominal, log, jobs)
+    p = prepare(rec, house, train_days, require_cut)
+    cut_at = outlets(p)
+    if cut_at:
+        log("replayed from their measured outlets: " + ", ".join(cut_at))
+        p = prepare(rec, house, train_days, require_cut, cut_at)
+    base = calibrate(p, house, refit_nominal, log, jobs)
     timing["replay_nominal"] = time.perf_counter() - t0
     t = time.perf_counter()
     loc = locate_mismatch(base)
@@ -256,5 +287,5 @@ def diagnose(rec, house: str = "house1", out=None, train_days: float = 2.0, effe
     return rep
 
 
-__all__ = ["diagnose", "prepare", "calibrate", "locate_mismatch", "fit_candidates", "select", "build_report",
+__all__ = ["diagnose", "prepare", "outlets", "calibrate", "locate_mismatch", "fit_candidates", "select", "build_report",
            "Prepared", "Baseline", "Location", "Selection"]

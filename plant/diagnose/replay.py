@@ -90,12 +90,13 @@ class Replayer:
     replayer every later run uses (base overrides, the instances calibrated alone, the emitter's
     element count, the end of the training window)."""
 
-    def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True, require_cut: bool = False):
+    def __init__(self, rec, house: str = "house1", init_from_sensors: bool = True, require_cut: bool = False,
+                 generators=()):
         self.rec = rec
         self.house_name = house
         self.init_from_sensors = init_from_sensors
         self.t = rec.time
-        self.cut, self.circuit = cut_mod.select(rec, house, required=require_cut)
+        self.cut, self.circuit = cut_mod.select(rec, house, required=require_cut, generators=generators)
         self.emitter = cut_mod.emitter_alone(rec, self.cut, house)
         # the heating circuit by role (its station, coupling point, emitter, zone): emitter.of
         self.heating = emitter_mod.of(house)

@@ -56,6 +56,13 @@ def identify(rec, rows: np.ndarray, catalogue_index, ran: dict) -> dict:
     return out
 
 
+def run_otherwise(m: dict) -> bool:
+    """Whether a unit's states (an identify entry) differ beyond MAX_SHARE: run otherwise than the
+    twin's model of it runs, not an occasional mode (pipeline.outlets replays such a unit from its
+    measured outlet where the recording has it)."""
+    return m["samples"] > 0 and not m["masked"]
+
+
 def apply(ctx, modes: dict):
     """The context with the masked samples dropped from the scoring of each unit's own signals
     (ctx.ok)."""
@@ -73,4 +80,4 @@ def public(modes: dict) -> dict:
     return {u: {k: v for k, v in m.items() if k != "mask"} for u, m in modes.items()}
 
 
-__all__ = ["identify", "apply", "public", "MAX_SHARE"]
+__all__ = ["identify", "run_otherwise", "apply", "public", "MAX_SHARE"]

@@ -1,5 +1,6 @@
 """A unit's own modes the twin lacks (plant/diagnose/unit_modes.py): occasional state
-differences are masked for that unit's signals only; a unit run differently is not."""
+differences are masked for that unit's signals only; a unit run differently is not, and is
+replayed from its measured outlet instead (pipeline.outlets)."""
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +47,7 @@ def test_a_lockout_is_masked_for_the_units_own_signals_only():
     assert before.ok.all()  # a new context; the one given is left as it was
     assert (~ctx.ok[:, 0]).sum() == 5 and (~ctx.ok[:, 1]).sum() == 5 and ctx.ok[:, 2].all()
     assert "mask" not in unit_modes.public(modes)["boiler"]
+    assert not unit_modes.run_otherwise(m)  # an occasional mode: the unit stays simulated
 
 
 def test_a_unit_run_differently_is_not_masked():
@@ -57,3 +59,8 @@ def test_a_unit_run_differently_is_not_masked():
     m = modes["boiler"]
     assert not m["masked"] and m["share_of_running"] > unit_modes.MAX_SHARE and not m["mask"].any()
     assert "scored" in m["why"]
+    # run otherwise: replayed from its measured outlet where the recording has it (pipeline.outlets)
+    assert unit_modes.run_otherwise(m)
+    same = unit_modes.identify(_Rec({"boiler.Q_flow": twin}), np.column_stack([twin]),
+                               {"boiler.Q_flow": 0}.__getitem__, RAN)["boiler"]
+    assert same["samples"] == 0 and not unit_modes.run_otherwise(same)
