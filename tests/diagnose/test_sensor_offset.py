@@ -85,3 +85,27 @@ def test_a_lag_within_its_sensors_limit_counts_where_it_removes_half_of_the_resi
     off = verdict._judged_local(fit.Result("sensor_offset", "sensor", "signal", True, theta=[0.5],
                                            signal="storage.T_sensor_9", effect=OFFSET, local=local), n_eff=100.0)
     assert not off.accepted and "no sensor-own mismatch" in off.reason
+
+
+@pytest.mark.parametrize("effect, theta, accepted", [("sensor_lag", 87.0, False), ("sensor_lag", 95.0, True),
+                                                     ("transport_delay", 90.0, False),
+                                                     ("transport_delay", 180.0, True)])
+def test_a_lag_or_dead_time_a_sleeve_gives_is_not_named(effect, theta, accepted):
+    """A lag or dead time of at most OWN_LAG_S (a PT100 in its sleeve or thermowell, the rig
+    descriptions' 20 ... 90 s) is the sensor's mounting, rejected with that reason however much of
+    the sensor's residual it removes; beyond it the same fit is accepted. Both where judged on the
+    sensor's own residual (a tank sensor) and where judged on the whole cost (a pipe sensor)."""
+    from plant.diagnose.effects.sensor import OWN_LAG_S
+
+    e = next(c for c in catalogue() if c.id == effect)
+    local = {"heldout_rms_before": 1.32, "heldout_rms_after": 0.58, "gain": 0.81, "limit": 0.62,
+             "neighbours": ["storage.T_sensor_2"]}
+    r = fit.Result(effect, "sensor", "signal", True, theta=[theta], signal="storage.T_sensor_1", effect=e,
+                   local=local)
+    got = verdict._judged_local(r, n_eff=100.0)
+    assert OWN_LAG_S == 90.0 and got.accepted is accepted, got.reason
+    assert ("sleeve or thermowell" in got.reason) is not accepted
+    whole = fit.Result(effect, "sensor", "signal", True, theta=[theta], signal="chp.T_sup", effect=e,
+                       train_cost=1.0, held_cost=0.5)
+    got = verdict._judged(whole, None, 100.0, verdict.bic(2.0, 100.0, 0), 1.0)
+    assert got.accepted is accepted, got.reason

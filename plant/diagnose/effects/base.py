@@ -82,9 +82,10 @@ class Effect:
     SHAPED_GAIN: float | None = None
 
     def tolerated(self, theta, ctx) -> str:
-        """kind "simulate": '' unless the fitted effect is no larger than what a difference of
-        every real plant that the twin does not carry imitates (a valve's travel); then why, in
-        words. Default: never."""
+        """Judged on the whole cost (a simulate candidate, or a signal one on a sensor without
+        neighbours): '' unless the fitted effect is no larger than what a difference of every real
+        plant that the twin does not carry imitates (a valve's travel, a sensor's sleeve); then
+        why, in words. Default: never."""
         return ""
 
     def fitted(self, ctx) -> list[int]:
