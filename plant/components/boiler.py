@@ -134,6 +134,31 @@ def _cgb20(tab_P, tab_dT, tab_eff, start, cool):
 
 
 @njit(cache=True)
+def measured(dt, x, p, tab_eff, U_set, m_meas, T_meas, T_in):
+    """The boiler at its measured outlet (flow m_meas, temperature T_meas): the heat is what the
+    water took, the gas what the efficiency table gives for it at the commanded modulation and
+    the return; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode) like step."""
+    m_flow = max(m_meas, 0.0)
+    T_out = T_meas if m_flow > 0.0 else T_in
+    P_heat = m_flow * CP * (T_out - T_in)  # the water's: below zero where it cooled in the boiler
+    running = P_heat > 0.0 and U_set > p[P.U_min]
+    if running and x[X.running] < 0.5:
+        x[X.starts] += 1.0
+    x[X.running] = 1.0 if running else 0.0
+    x[X.y] = min(1.0, U_set / 10.0) if running else 0.0
+    m = min(1.0, max(p[P.m_min], x[X.y]))
+    eta = interp2(max(T_in, p[P.T_ret_min]) + 273.15, m, tab_eff) * p[P.eta_max]
+    P_fuel = P_heat / eta if running else 0.0
+    P_el = 0.0 if running else -p[P.P_idle]
+    if running:
+        x[X.run_seconds] += dt
+    x[X.E_fuel] += P_fuel * dt
+    x[X.E_el] += P_el * dt
+    x[X.E_heat] += P_heat * dt
+    return m_flow, T_out, P_el, P_fuel, P_heat, STEADY if running else IDLE
+
+
+@njit(cache=True)
 def step(t, dt, x, p, tab_P, tab_dT, tab_eff, tab_start, tab_cool, U_set, m_ext, T_in):
     """Advance the boiler by dt from time t; returns (m_flow, T_out, P_el, P_fuel, P_heat, mode)."""
     if T_in > p[P.T_ret_max]:
@@ -211,7 +236,11 @@ class Kind(Generator):
     Params = Params
     LINKS = {"data": link("wolf_cgb14", "steady-state data set: wolf_cgb14 (CGB-14 laboratory tables, scaled by "
                                         "P_nom) or wolf_cgb20 (the CGB-20 data sheet, P_nom = 20000)",
-                          type=DataSet, range=DATA_SETS)}
+                          type=DataSet, range=DATA_SETS),
+             "outlet": link("simulated", "simulated (the model's outlet), or measured: the outlet temperature and "
+                                         "flow are inputs (m_flow_measured, T_sup_measured: a recording's), the gas "
+                                         "follows from the heat by the efficiency table", type=str,
+                            range=("simulated", "measured"))}
     NOUN = "boiler"
     MODES = (Mode.IDLE, Mode.START_UP, Mode.STEADY, Mode.RUN_ON, Mode.LOCKED_OUT, Mode.ANTI_CYCLE, Mode.FAULT)
     POWER = ("Q_flow", "P_fuel", "P_el")
@@ -229,6 +258,12 @@ class Kind(Generator):
         tabs = ", ".join(c.table(a) for a in tables("standard" if data == "wolf_cgb14" else data))
         U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
         mod = c.module(__name__)
-        c.emit("hydraulics", f"{out.targets()} = {mod}.step(t, h, {x}, {p}, {tabs}, {U}, {m_ext}, {T_in})")
+        if inst.options.get("outlet") == "measured":
+            m_in = c.signal(inst, "m_flow_measured", "kg/s", "input", "measured boiler flow")
+            T_meas = c.signal(inst, "T_sup_measured", "degC", "input", "measured boiler outlet temperature")
+            eff = c.table(tables("standard" if data == "wolf_cgb14" else data)[2])
+            c.emit("hydraulics", f"{out.targets()} = {mod}.measured(h, {x}, {p}, {eff}, {U}, {m_in}, {T_meas}, {T_in})")
+        else:
+            c.emit("hydraulics", f"{out.targets()} = {mod}.step(t, h, {x}, {p}, {tabs}, {U}, {m_ext}, {T_in})")
         self.emit_outputs(c, inst, x, X, out, T_in)
         return out.m, out.T

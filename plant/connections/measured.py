@@ -48,24 +48,12 @@ class DrawKind(dhw.Kind):
 
 class GeneratorKind(ComponentKind):
     """A generator whose outlet is measured: it delivers `<name>.m_flow` at `<name>.T_sup` (the
-    storage driven by measured generator flows and outlet temperatures). `commands` keeps the
-    inputs the controllers wrote to the unit it stands in for (a boiler's `U_set`) as inputs that
-    nothing reads: the controllers still compile, and the measured outlet already holds the
-    unit's response to them."""
+    storage driven by measured generator flows and outlet temperatures)."""
 
     name = "measured_generator"
     role = "generator"
-    LINKS = {"commands": link((), "inputs of the replaced unit its controllers write (kept, not read)", type=list)}
-
-    def check(self, inst, problems):
-        cmds = inst.options.get("commands")
-        if not isinstance(cmds, (list, tuple)) or not all(isinstance(x, str) and x.isidentifier() for x in cmds):
-            problems.append(f"{inst.at('commands')} = {cmds!r}: expected a list of input names (e.g. [\"U_set\"])")
-            inst.options["commands"] = ()
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
-        for local in inst.options.get("commands") or ():
-            c.signal(inst, local, "1", "input", "command of the replaced unit (not read: the outlet is measured)")
         m_in = c.signal(inst, "m_flow", "kg/s", "input", "measured generator flow")
         T_in_meas = c.signal(inst, "T_sup", "degC", "input", "measured generator outlet temperature")
         m, T, Q = c.var("m_gen_meas"), c.var("T_gen_meas"), c.var("Q_gen_meas")

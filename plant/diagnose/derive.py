@@ -54,8 +54,8 @@ SIDES = {
                    "profiles are outside the replayed plant"),
 }
 STATION, DRAW = "mixing_station", "dhw_draw"
-# a generator cut at its measured outlet (plant/connections/measured.py): input local -> recorded local
-OUTLET = (("m_flow", "m_flow"), ("T_sup", "T_sup"))
+# a generator at its measured outlet (its kind's `outlet = "measured"`): input local -> recorded local
+OUTLET = (("m_flow_measured", "m_flow"), ("T_sup_measured", "T_sup"))
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,7 @@ class DerivedCut:
     tables: dict           # instance -> its table in the variant (the measured boundaries)
     bindings: dict         # input of the cut house -> the recorded signal it follows
     why: str
-    generators: tuple = ()  # generators replayed from their measured outlet and flow
+    generators: tuple = ()  # generators kept, at their measured outlet and flow
 
     @property
     def label(self) -> str:
@@ -104,9 +104,10 @@ class DerivedCut:
 
 def derive(house, name: str = "circuit", generators=()) -> DerivedCut:
     """The cut of `house` (a name or a house file) at every heating circuit's `name` side
-    (SIDES) and every hot-water draw, and at the outlet of each of `generators` (its measured
-    flow and outlet temperature in its place: the unit is run otherwise than the twin's model of
-    it runs, unit_modes.py). A house with no mixing station, or one whose remaining instances
+    (SIDES) and every hot-water draw, and at the outlet of each of `generators` (its kind's
+    `outlet = "measured"`: its outlet temperature and flow follow the recording, its commands,
+    efficiency and counters stay; for a unit run otherwise than the twin's model runs it,
+    pipeline.outlets). A house with no mixing station, or one whose remaining instances
     name a removed one, cannot be cut: a ConfigError says which and why."""
     if name not in SIDES:
         raise ConfigError(f"cut {name!r}: unknown; cuts: {', '.join(SIDES)}")
@@ -134,12 +135,13 @@ def derive(house, name: str = "circuit", generators=()) -> DerivedCut:
         bindings[f"{d.name}.m_flow_hot"] = f"{d.name}.m_flow_hot"
     for g in generators:
         if g not in inst or KINDS[inst[g].kind].role != "generator":
-            raise ConfigError(f"{spec.path}: {g!r} is no generator of {spec.name}; a cut replaces a generator "
-                              "by its measured outlet and flow")
-        written = [str(v).split(".", 1)[1] for i in inst.values() if KINDS[i.kind].role == "controller"
-                   for v in (i.options.get("outputs") or {}).values() if str(v).split(".", 1)[0] == g]
-        removes.append(g)
-        tables[g] = {"kind": "measured_generator", "commands": list(dict.fromkeys(written))}
+            raise ConfigError(f"{spec.path}: {g!r} is no generator of {spec.name}; a cut puts a generator's "
+                              "measured outlet and flow in its model's place")
+        if "outlet" not in KINDS[inst[g].kind].LINKS:
+            raise ConfigError(f"{spec.path}: {g} ({inst[g].kind}) cannot run at a measured outlet; kinds that can: "
+                              + ", ".join(k for k, kind in sorted(KINDS.items()) if "outlet" in kind.LINKS))
+        # the unit stays (its commands, efficiency and counters); its outlet follows the recording
+        tables[g] = {"outlet": "measured"}
         bindings.update({f"{g}.{local}": f"{g}.{rec}" for local, rec in OUTLET})
     gone = set(removes) - set(tables)
     for i in inst.values():
@@ -151,7 +153,8 @@ def derive(house, name: str = "circuit", generators=()) -> DerivedCut:
                 raise ConfigError(f"{i.at(k)}: names {', '.join(sorted(named))}, which the cut at the {name} removes "
                                   f"(with {', '.join(st.name for st in stations)}); a recording of this house is "
                                   "replayed whole")
-    why = side.words + "".join(f"; {g} replayed from its measured outlet temperature and flow" for g in generators)
+    why = side.words + "".join(f"; {g} at its measured outlet temperature and flow (its gas from its efficiency)"
+                               for g in generators)
     return DerivedCut(name, spec.path, spec.name, tuple(removes), tables, bindings, why, tuple(generators))
 
 

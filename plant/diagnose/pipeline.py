@@ -78,8 +78,8 @@ def prepare(rec, house: str, train_days: float, require_cut: bool, generators: d
     for unit, m in (generators or {}).items():
         warnings.append(f"{unit}: the recording runs it otherwise than the twin's model of it does (their running "
                         f"states differ at {100 * m['share_of_running']:.0f} % of its running samples, more than "
-                        f"unit_modes.MAX_SHARE {100 * unit_modes.MAX_SHARE:.0f} %): replayed from its measured outlet "
-                        "temperature and flow, and no effect on it is judged")
+                        f"unit_modes.MAX_SHARE {100 * unit_modes.MAX_SHARE:.0f} %): replayed at its measured outlet "
+                        "temperature and flow (its gas from its efficiency), and no effect on it is judged")
     simulated = rp.simulated
     for unit, runs in rp.unfollowed.items():
         # the twin's own control runs it (Replayer); its signals, sampled between pulses, are not
@@ -91,6 +91,11 @@ def prepare(rec, house: str, train_days: float, require_cut: bool, generators: d
                         f"faster, or as a run-time count)")
     ctx = Context.build(rec, train_days=train_days, simulated=simulated, roles=rp.roles)
     return Prepared(ctx, rp.with_calibration(t_train=ctx.t_split), tuple(warnings))
+
+
+def outlets_of(rp) -> tuple:
+    """The generators a replayer runs at their measured outlets."""
+    return rp.cut.generators if rp.cut else ()
 
 
 def outlets(p: Prepared) -> dict:
@@ -158,7 +163,7 @@ def locate_mismatch(b: Baseline) -> Location:
     ctx, rp, sim0 = b.ctx, b.replayer, b.ctx.nominal_sim
     affected = locate.mismatched_signals(ctx, sim0, ctx.held)
     summary = {"replay": {"plant": rp.plant_label, "cut": rp.cut.name if rp.cut else None,
-                          "generators_at_measured_outlet": list(rp.cut.generators) if rp.cut else [],
+                          "generators_at_measured_outlet": list(outlets_of(rp)),
                           "boundaries": dict(rp.bound), "mixing_station_alone": rp.circuit,
                           "emitter_alone": rp.emitter},
                "subsystems": locate.subsystems(ctx, sim0, ctx.held, affected),
@@ -182,7 +187,7 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
             continue
         # a unit's own candidate on a unit the cut replaced (unless replayed alone: the heating
         # circuit's station and emitter, emitter.of)
-        if isinstance(e, UnitEffect) and e.at in rp.removed - rp.alone_instances:
+        if isinstance(e, UnitEffect) and e.at in (rp.removed - rp.alone_instances) | set(outlets_of(rp)):
             results.append(fit.Result(e.id, e.component, e.kind, False, f"the replay's cut puts measurements where "
                                       f"{e.component} was ({rp.plant_label})", effect=e))
             continue

@@ -168,7 +168,9 @@ class Replayer:
 
         cat = catalogue_of(self.plant_name)
         self._src, self._dst = [], []
-        inputs = set(self.bound)
+        # a bound signal's recorded counterpart is no prediction either (a generator at its
+        # measured outlet: boiler.T_sup follows boiler.T_sup_measured)
+        inputs = set(self.bound) | set(self.bound.values())
         simulated = []
         for s in cat:
             if s.name in self.roles.catalogue:

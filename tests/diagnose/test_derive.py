@@ -92,48 +92,47 @@ def test_a_house_without_a_mixing_station_says_where_a_circuit_is_cut(tmp_path):
 
 
 def test_a_generator_at_its_measured_outlet_replays_the_storage_the_boiler_gave():
-    """The circuit cut with the boiler in its measured outlet's place (a unit the lab runs
-    otherwise than the twin's model: pipeline.outlets), bound to a whole-house run's boiler flow
-    and outlet temperature besides the circuit and draw, gives the storage the heat the boiler
-    gave: the same storage temperatures as the cut with the boiler simulated, within 0.05 K over
-    6 h with the boiler commanded on for two of them; its heat is m cp (T_sup - T_ret) each step,
-    and the boiler's command stays an input that nothing reads."""
+    """The circuit cut with the boiler at its measured outlet (`outlet = "measured"`: a unit the
+    lab runs otherwise than the twin's model, pipeline.outlets), bound to a whole-house run's
+    boiler flow and outlet temperature besides the circuit and draw, gives the storage the heat
+    the boiler gave: the same storage temperatures as the cut with the boiler simulated, within
+    0.05 K over 6 h with the boiler commanded on for two of them. Its heat is m cp (T_sup - T_ret)
+    each step, and its gas, from its efficiency table at the commanded modulation, is the
+    simulated boiler's within 3 % over the run (which burns at full rate while its start-up
+    table ramps the heat)."""
     from plant.compiler import catalogue_of
     from plant.water import CP
 
     plain, cut = derive("house1", "circuit"), derive("house1", "circuit", ("boiler",))
-    assert cut.label == "house1_cut_circuit_boiler" and "boiler" in cut.removes
-    assert cut.bindings["boiler.T_sup"] == "boiler.T_sup" and cut.bindings["boiler.m_flow"] == "boiler.m_flow"
+    assert cut.label == "house1_cut_circuit_boiler" and "boiler" not in cut.removes
+    assert cut.bindings["boiler.T_sup_measured"] == "boiler.T_sup"
+    assert cut.bindings["boiler.m_flow_measured"] == "boiler.m_flow"
     cat = catalogue_of(str(cut.path()))
-    assert cat.signal("boiler.U_set").causality == "input" and "boiler.P_fuel" not in cat
+    assert cat.signal("boiler.T_sup_measured").causality == "input" and cat.signal("boiler.P_fuel")
     on = (np.array([0.0, 3600.0, 3 * 3600.0, HOURS * 3600.0]), np.array([[0.0], [10.0], [0.0], [0.0]]))
     full = load_house("house1", start="2021-01-12", controller="external")
     full.bind(["boiler.U_set"], *on, interpolation="hold")
     t, ref = _record(full, list(cut.bindings.values()), HOURS)
-    assert (ref[:, list(cut.bindings).index("boiler.m_flow")] > 0.01).sum() > 3600  # it ran
+    assert (ref[:, list(cut.bindings.values()).index("boiler.m_flow")] > 0.01).sum() > 3600  # it ran
     runs = []
     for c in (plain, cut):
         house = load_house(str(c.path()), start="2021-01-12", controller="external")
         house.bind(["boiler.U_set"], *on, interpolation="hold")
         cols = [list(cut.bindings).index(k) for k in c.bindings]
         house.bind(list(c.bindings), t - 1.0, ref[:, cols], interpolation="hold")
-        names = STORAGE[:10] + ["boiler.Q_flow", "boiler.T_ret", "boiler.T_sup", "boiler.m_flow"]
+        names = STORAGE[:10] + ["boiler.Q_flow", "boiler.T_ret", "boiler.T_sup", "boiler.m_flow", "boiler.P_fuel"]
         runs.append(_record(house, names, HOURS)[1])
     simulated, measured = runs
     assert np.ptp(simulated[:, 9]) > 1.0  # the boiler's heat moved the tank
     assert np.max(np.abs(measured[:, :10] - simulated[:, :10])) < 0.05
     Q = measured[:, 13] * CP * (measured[:, 12] - measured[:, 11])
     assert np.allclose(measured[:, 10], Q, rtol=1e-3, atol=1.0)
+    assert measured[:, 14].sum() == pytest.approx(simulated[:, 14].sum(), rel=0.03)
+    assert measured[:, 14].sum() > 0.0
 
 
-def test_only_a_generator_can_be_cut_at_its_outlet():
+def test_only_a_generator_whose_kind_can_take_a_measured_outlet_is_cut_there():
     with pytest.raises(ConfigError, match="'storage' is no generator of house1"):
         derive("house1", "circuit", ("storage",))
-
-
-def test_a_measured_generator_with_bad_commands_is_named(tmp_path):
-    path = tmp_path / "bad_commands.toml"
-    path.write_text(f'[house]\nname = "bad"\nbase = "{HOUSES / "house1_cut_circuit.toml"}"\nremove = ["boiler"]\n'
-                    '[boiler]\nkind = "measured_generator"\ncommands = ["U set", 3]\n')
-    with pytest.raises(ConfigError, match=r"\[boiler\] commands = \['U set', 3\]: expected a list of input names"):
-        load_house(str(path))
+    with pytest.raises(ConfigError, match=r"chp \(chp\) cannot run at a measured outlet; kinds that can: boiler"):
+        derive("house1", "circuit", ("chp",))
