@@ -109,3 +109,33 @@ def test_a_lag_or_dead_time_a_sleeve_gives_is_not_named(effect, theta, accepted)
                        train_cost=1.0, held_cost=0.5)
     got = verdict._judged(whole, None, 100.0, verdict.bic(2.0, 100.0, 0), 1.0)
     assert got.accepted is accepted, got.reason
+
+
+def test_an_offset_where_the_tank_is_steep_is_judged_with_the_place_fitted_with_it():
+    """The shape check reads the residual the offset's own model leaves (the sensor's place
+    fitted together with the offset, as SensorOffset.solve fits them). A -2 K offset on a sensor
+    whose tank is steep only while the heating is off: placed without the offset, the place takes
+    part of it in that state and the rest looks not constant (labsim realisation 3's -3 K offset
+    on sensor 5 kept 0.41 of itself with the CHP off); with it, the offset is alike in every state."""
+    from plant.diagnose.replay import Replay
+    from plant.diagnose.sensor_height import HeightFit
+
+    rec = synth.make("none", days=1.0, noise=False)
+    ctx = Context.build(rec, train_days=0.5)
+    s = "storage.T_sensor_5"
+    j = ctx.measured.index(s)
+    sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0)
+    sim[:, j] += 2.0                                    # the lab's sensor reads 2 K low
+    steep = ~ctx.flags["heating_on"]
+    assert STATE_SHARE < steep[ctx.train].mean() < 1.0 - STATE_SHARE
+    g = np.where(steep, 60.0, 0.0)                      # K per tank height; a shift reads s x g
+    rows = np.zeros((len(sim), max(ctx.cols) + 1))
+    rows[:, ctx.cols] = sim
+    ctx = ctx.with_baseline(Replay(rows, heights={s: HeightFit(0.0, 0.03, g)}), (), (), {})
+    r = fit.fit_signal(OFFSET, ctx, sim, only=s)
+    assert r.theta[0] == pytest.approx(-2.0, abs=0.05) and r.local["unlike"] == ""
+    # the old reading of the residual, placed without the offset: not constant
+    m = ctx.train & ctx.ok[:, j]
+    before = fit.placed(ctx.meas[:, j], sim[:, j], m, ctx.heights[s])
+    e = ctx.meas[m, j] - before[m]
+    assert OFFSET.unlike([-2.0], e, {k: f[m] for k, f in ctx.states.items()}).startswith("not constant")
