@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import sensor_height
+from .sensor_height import placed
 from .bounded import at_bound, descent, scalar_search
 from .sim_fit import TrainingCost, along, local_pass, rechoose_scheme
 
@@ -214,15 +214,6 @@ def common_mode(ctx, nominal_sim, j):
 # neighbours (labsim's no-effect case: at most 27 %; a 1.5 K offset or a 300 s lag: 40 %); here on
 # the training window to pick the signal, in verdict._judge_local on the held-out window
 LOCAL_GAIN = 0.35
-
-
-def placed(meas, y, m, hf):
-    """The reading y moved within its sensor's height tolerance to fit meas on mask m
-    (sensor_height.py; hf None: not a storage sensor, y as it is)."""
-    if hf is None:
-        return y
-    g = hf.g[:len(y)]
-    return y + sensor_height.best_shift(meas[:len(y)] - y, g, m[:len(y)], hf.tol) * g
 
 
 class _Tried(NamedTuple):

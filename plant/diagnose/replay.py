@@ -168,8 +168,7 @@ class Replayer:
 
         cat = catalogue_of(self.plant_name)
         self._src, self._dst = [], []
-        # a bound signal's recorded counterpart is no prediction either (a generator at its
-        # measured outlet: boiler.T_sup follows boiler.T_sup_measured)
+        # nor is a bound signal's recorded counterpart (boiler.T_sup follows T_sup_measured)
         inputs = set(self.bound) | set(self.bound.values())
         simulated = []
         for s in cat:

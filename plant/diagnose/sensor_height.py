@@ -72,6 +72,15 @@ def best_shift(e: np.ndarray, g: np.ndarray, m: np.ndarray, tol: float) -> float
     return float(np.clip(float(g[m] @ e[m]) / den, -tol, tol))
 
 
+def placed(meas, y, m, hf):
+    """The reading y moved within its sensor's height tolerance to fit meas on mask m (hf None:
+    not a storage sensor, y as it is)."""
+    if hf is None:
+        return y
+    g = hf.g[:len(y)]
+    return y + best_shift(meas[:len(y)] - y, g, m[:len(y)], hf.tol) * g
+
+
 def apply(rec, out: np.ndarray, cols: dict, n: int, heights_m: dict, t_fit: float | None) -> dict:
     """Move the measured storage sensors' columns of the replay rows `out` (first n samples)
     within their tolerance, each shift fitted on the samples up to t_fit (None: no shift).
@@ -93,4 +102,4 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, heights_m: dict, t_fit: floa
     return fits
 
 
-__all__ = ["apply", "best_shift", "gradients", "HeightFit", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
+__all__ = ["apply", "best_shift", "placed", "gradients", "HeightFit", "SLEEVE_TOL_M", "GEOMETRY_TOL"]

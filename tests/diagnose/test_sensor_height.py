@@ -6,7 +6,7 @@ import pytest
 
 from plant.diagnose import sensor_height
 from plant.diagnose.effects.sensor import SensorOffset
-from plant.diagnose.fit import placed
+from plant.diagnose.sensor_height import placed
 from plant.diagnose.sensor_height import HeightFit
 
 

@@ -118,6 +118,7 @@ def test_an_offset_where_the_tank_is_steep_is_judged_with_the_place_fitted_with_
     part of it in that state and the rest looks not constant (labsim realisation 3's -3 K offset
     on sensor 5 kept 0.41 of itself with the CHP off); with it, the offset is alike in every state."""
     from plant.diagnose.replay import Replay
+    from plant.diagnose import sensor_height
     from plant.diagnose.sensor_height import HeightFit
 
     rec = synth.make("none", days=1.0, noise=False)
@@ -136,6 +137,6 @@ def test_an_offset_where_the_tank_is_steep_is_judged_with_the_place_fitted_with_
     assert r.theta[0] == pytest.approx(-2.0, abs=0.05) and r.local["unlike"] == ""
     # the old reading of the residual, placed without the offset: not constant
     m = ctx.train & ctx.ok[:, j]
-    before = fit.placed(ctx.meas[:, j], sim[:, j], m, ctx.heights[s])
+    before = sensor_height.placed(ctx.meas[:, j], sim[:, j], m, ctx.heights[s])
     e = ctx.meas[m, j] - before[m]
     assert OFFSET.unlike([-2.0], e, {k: f[m] for k, f in ctx.states.items()}).startswith("not constant")

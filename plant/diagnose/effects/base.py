@@ -56,7 +56,7 @@ class Effect:
 
     def solve(self, e: np.ndarray, m: np.ndarray, shift) -> float | None:
         """kind "signal": the parameter in closed form from the residual e = measured - simulated
-        on mask m (shift: the sensor's height freedom, fit.placed; None without), or None: fitted
+        on mask m (shift: the sensor's height freedom, sensor_height.placed; None without), or None: fitted
         by a bounded search instead."""
         return None
 
