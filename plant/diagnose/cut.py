@@ -46,7 +46,7 @@ def select(rec, house: str, required: bool = False, generators=()):
     """The cut whose recorded signals the recording holds (None: the whole house), and whether
     the mixing station can be replayed alone. required: a recording that allows no cut is an
     error naming what the cut lacks (the whole house would replay on the twin's own building and
-    profiles). generators: also cut at those generators' measured outlets (outlet_cuttable)."""
+    profiles). generators: run those at their measured outlets too (outlet_cuttable)."""
     try:
         cut = circuit_cut(house, generators)
     except ConfigError as exc:
@@ -68,7 +68,7 @@ def select(rec, house: str, required: bool = False, generators=()):
 
 def outlet_cuttable(rec, unit: str) -> bool:
     """Whether the recording measures a generator's outlet temperature and flow, so that a cut
-    can put them where the generator was (derive.OUTLET)."""
+    can run the generator at them (derive.OUTLET)."""
     from .derive import OUTLET
 
     return all(rec.has(f"{unit}.{recorded}") for _, recorded in OUTLET)
