@@ -66,12 +66,16 @@ def select(rec, house: str, required: bool = False, generators=()):
     return cut, circuit
 
 
-def outlet_cuttable(rec, unit: str) -> bool:
-    """Whether the recording measures a generator's outlet temperature and flow, so that a cut
-    can run the generator at them (derive.OUTLET)."""
+def outlet_cuttable(rec, house, unit: str) -> bool:
+    """Whether the recording measures a generator's outlet temperature and flow and its kind can
+    run at them (a kind with an `outlet` link: the boiler), so that a cut can (derive.OUTLET)."""
+    from ..declaration import load
+    from ..kinds import KINDS
     from .derive import OUTLET
 
-    return all(rec.has(f"{unit}.{recorded}") for _, recorded in OUTLET)
+    inst = load(house).instances.get(unit)
+    return (inst is not None and "outlet" in KINDS[inst.kind].LINKS
+            and all(rec.has(f"{unit}.{recorded}") for _, recorded in OUTLET))
 
 
 def emitter_alone(rec, cut, house) -> bool:

@@ -106,7 +106,7 @@ def outlets(p: Prepared) -> dict:
     measures that outlet and the replay is on a cut. Their heat then reaches the storage as the
     lab's did, and the effects left to judge are those of the rest of the plant."""
     rp, rec = p.replayer, p.ctx.rec
-    units = [u for u in rp.roles.ran if cut_mod.outlet_cuttable(rec, u)]
+    units = [u for u in rp.roles.ran if cut_mod.outlet_cuttable(rec, rp.house_name, u)]
     if rp.cut is None or not units:
         return {}
     modes = unit_modes.identify(rec, rp.run().rows, p.ctx.index, {u: rp.roles.ran[u] for u in units})
@@ -189,7 +189,8 @@ def fit_candidates(b: Baseline, effects, jobs: int | None, log) -> tuple:
         # circuit's station and emitter, emitter.of)
         if isinstance(e, UnitEffect) and e.at in (rp.removed - rp.alone_instances) | set(outlets_of(rp)):
             results.append(fit.Result(e.id, e.component, e.kind, False, f"the replay's cut puts measurements where "
-                                      f"{e.component} was ({rp.plant_label})", effect=e))
+                                      f"{e.component} was, or runs it at its measured outlet ({rp.plant_label})",
+                                      effect=e))
             continue
         ok, why = e.plausible(ctx) if e.available else (False, e.description)
         if not ok:

@@ -136,3 +136,22 @@ def test_only_a_generator_whose_kind_can_take_a_measured_outlet_is_cut_there():
         derive("house1", "circuit", ("storage",))
     with pytest.raises(ConfigError, match=r"chp \(chp\) cannot run at a measured outlet; kinds that can: boiler"):
         derive("house1", "circuit", ("chp",))
+
+
+def test_a_generator_is_put_at_its_outlet_only_where_recorded_and_its_kind_can_run_there():
+    """cut.outlet_cuttable: the boiler with its outlet temperature and flow recorded; not without
+    its flow, and never the CHP (its kind has no measured outlet), however much is recorded."""
+    from plant.diagnose.cut import outlet_cuttable
+
+    class Rec:
+        def __init__(self, *names):
+            self.names = set(names)
+
+        def has(self, s):
+            return s in self.names
+
+    full = Rec("boiler.T_sup", "boiler.m_flow", "chp.T_sup", "chp.m_flow")
+    assert outlet_cuttable(full, "house1", "boiler")
+    assert not outlet_cuttable(Rec("boiler.T_sup"), "house1", "boiler")
+    assert not outlet_cuttable(full, "house1", "chp")
+    assert not outlet_cuttable(full, "house1", "no_such_unit")
