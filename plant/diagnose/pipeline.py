@@ -110,7 +110,8 @@ def outlets(p: Prepared) -> dict:
     if rp.cut is None or not units:
         return {}
     modes = unit_modes.identify(rec, rp.run().rows, p.ctx.index, {u: rp.roles.ran[u] for u in units})
-    return {u: unit_modes.public({u: m})[u] for u, m in modes.items() if unit_modes.run_otherwise(m)}
+    public = unit_modes.public(modes)
+    return {u: public[u] for u, m in modes.items() if unit_modes.run_otherwise(m)}
 
 
 def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | None = 1) -> Baseline:

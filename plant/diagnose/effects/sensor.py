@@ -43,15 +43,25 @@ def _first_order(t, y, tau):
 OWN_LAG_S = 90.0
 
 
-def _mounting(what: str, seconds: float) -> str:
-    if seconds <= OWN_LAG_S:
-        return (f"the {seconds:.0f} s {what} is within a sensor's own lag in its sleeve or thermowell "
-                f"(<= {OWN_LAG_S:.0f} s)")
-    return ""
+class _Mounted:
+    """A sensor candidate whose size is a time: no longer than OWN_LAG_S it is the sensor's
+    mounting, judged on its sensor's own residual (within) or on the whole cost (tolerated)."""
+
+    MOUNTING = "lag"  # what the report calls the fitted time
+
+    def within(self, theta, limit):
+        return self.tolerated(theta, None)
+
+    def tolerated(self, theta, ctx):
+        seconds = float(theta[0])
+        if seconds <= OWN_LAG_S:
+            return (f"the {seconds:.0f} s {self.MOUNTING} is within a sensor's own lag in its sleeve or "
+                    f"thermowell (<= {OWN_LAG_S:.0f} s)")
+        return ""
 
 
 @register
-class SensorLag(Effect):
+class SensorLag(_Mounted, Effect):
     id = "sensor_lag"
     component = "sensor"
     kind = "signal"
@@ -67,12 +77,6 @@ class SensorLag(Effect):
 
     def apply(self, t, y, theta):
         return first_order(t, y, float(theta[0]))
-
-    def within(self, theta, limit):
-        return _mounting("lag", float(theta[0]))
-
-    def tolerated(self, theta, ctx):
-        return _mounting("lag", float(theta[0]))
 
     def summary(self, theta, ctx, sim=None):
         return f"sensor time constant {theta[0]:.0f} s"
@@ -144,24 +148,19 @@ class SensorOffset(Effect):
 
 
 @register
-class TransportDelay(Effect):
+class TransportDelay(_Mounted, Effect):
     id = "transport_delay"
     component = "sensor"
     kind = "signal"
     params = (Param("delay", 0.0, 1800.0, 0.0, "s"),)
     description = "dead time between the plant and a sensor (pipe transport)"
+    MOUNTING = "dead time"
 
     def apply(self, t, y, theta):
         d = float(theta[0])
         if d <= 0:
             return y
         return np.interp(t - d, t, y, left=y[0])
-
-    def within(self, theta, limit):
-        return _mounting("dead time", float(theta[0]))
-
-    def tolerated(self, theta, ctx):
-        return _mounting("dead time", float(theta[0]))
 
     def summary(self, theta, ctx, sim=None):
         return f"transport delay {theta[0]:.0f} s"
