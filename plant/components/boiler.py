@@ -259,8 +259,7 @@ class Kind(Generator):
         U = c.signal(inst, "U_set", "V", "input", "boiler 0-10 V demand: <= 2 V off, above: modulation U/10")
         mod = c.module(__name__)
         if inst.options.get("outlet") == "measured":
-            m_in = c.signal(inst, "m_flow_measured", "kg/s", "input", "measured boiler flow")
-            T_meas = c.signal(inst, "T_sup_measured", "degC", "input", "measured boiler outlet temperature")
+            m_in, T_meas = self.measured_outlet(c, inst)
             eff = c.table(tables("standard" if data == "wolf_cgb14" else data)[2])
             c.emit("hydraulics", f"{out.targets()} = {mod}.measured(h, {x}, {p}, {eff}, {U}, {m_in}, {T_meas}, {T_in})")
         else:

@@ -145,6 +145,17 @@ class Generator(ComponentKind):
                f"{c.ledger_entry(inst, 'el')} += {out.P_el} * h",
                f"{c.ledger_entry(inst, 'heat')} += {out.P_heat} * h")
 
+    # A kind that can run at a recording's outlet (its `outlet = "measured"` link) takes its outlet
+    # flow and temperature as these inputs; a cut binds each to the recorded shared signal named
+    # beside it (plant/diagnose/derive.py).
+    MEASURED_OUTLET = (("m_flow_measured", "m_flow", "kg/s", "measured {noun} flow"),
+                       ("T_sup_measured", "T_sup", "degC", "measured {noun} outlet temperature"))
+
+    def measured_outlet(self, c, inst) -> tuple[str, ...]:
+        """The MEASURED_OUTLET inputs declared on `inst`: their expressions (flow, temperature)."""
+        return tuple(c.signal(inst, local, unit, "input", desc.format(noun=self.NOUN))
+                     for local, _, unit, desc in self.MEASURED_OUTLET)
+
     def emit_own(self, c, inst, *signals) -> None:
         """Output signals only this kind has, (local, unit, description, expression) each."""
         c.emit("signals", *(f"{c.signal(inst, local, unit, 'output', desc)} = {expr}"

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Callable, NamedTuple
 
 from .. import cache_dir
+from ..components.generator import Generator
 from ..declaration import load, read
 from ..errors import ConfigError
 from ..kinds import KINDS
@@ -55,7 +56,7 @@ SIDES = {
 }
 STATION, DRAW = "mixing_station", "dhw_draw"
 # a generator at its measured outlet (its kind's `outlet = "measured"`): input local -> recorded local
-OUTLET = (("m_flow_measured", "m_flow"), ("T_sup_measured", "T_sup"))
+OUTLET = tuple((local, recorded) for local, recorded, _, _ in Generator.MEASURED_OUTLET)
 
 
 @dataclass(frozen=True)
