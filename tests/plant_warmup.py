@@ -53,12 +53,17 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
 # and compile none, so a plant read at the lab's or the rig's sensors is the one listed here.
 # House 2's are those its rig recording replays (tests/diagnose/test_any_house.py), found by
 # loading every plant a diagnosis of it replays.
+# A cut may also put the boiler at its measured outlet (pipeline.outlets: where the recording runs it
+# otherwise than the twin's model, as every lab and rig recording of the suite does).
 _MIXING = {"switch.storage_inlet_mixing": 0.025}
+_BOILER = ("boiler",)
 DIAGNOSIS_VARIANTS = (
     ("house1 (driven)", "house1", False, {}),
     ("house1 + port mixing", "house1", False, _MIXING),
     ("house1 cut", "house1", True, {}),
     ("house1 cut + port mixing", "house1", True, _MIXING),
+    ("house1 cut, boiler at its outlet", "house1", _BOILER, {}),
+    ("house1 cut, boiler at its outlet + port mixing", "house1", _BOILER, _MIXING),
     ("house2 cut", "house2", True, {}),
     ("house2 cut + port mixing", "house2", True, _MIXING),
     ("house2 cut + heating port mixing", "house2", True, {"heating.storage_inlet_mixing": 0.025}),
@@ -66,9 +71,10 @@ DIAGNOSIS_VARIANTS = (
 )
 
 
-def compile_variant(label: str, house: str, cut: bool, overrides: dict) -> tuple[str, float, str | None]:
+def compile_variant(label: str, house: str, cut, overrides: dict) -> tuple[str, float, str | None]:
     """Load one variant as a replay does (external controller) and drive it for two samples, so
-    that its advance is compiled (or found in the cache): (label, seconds, error)."""
+    that its advance is compiled (or found in the cache): (label, seconds, error). cut: False (the
+    house), True (its circuit cut) or the generators the cut puts at their measured outlets."""
     t = time.monotonic()
     try:
         import numpy as np
@@ -79,7 +85,7 @@ def compile_variant(label: str, house: str, cut: bool, overrides: dict) -> tuple
         if cut:
             from plant.diagnose.derive import derive
 
-            path = str(derive(house, "circuit").path())
+            path = str(derive(house, "circuit", () if cut is True else tuple(cut)).path())
         h = load_house(path, start="2021-01-10", controller="external", overrides=overrides or None)
         h.drive(np.array([0.0, 60.0]), [], np.zeros((2, 0)))
         h.close()

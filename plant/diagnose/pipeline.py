@@ -77,9 +77,9 @@ def prepare(rec, house: str, train_days: float, require_cut: bool, generators: d
     rp = replay.Replayer(rec, house, require_cut=require_cut, generators=tuple(generators or ()))
     for unit, m in (generators or {}).items():
         warnings.append(f"{unit}: the recording runs it otherwise than the twin's model of it does (their running "
-                        f"states differ at {100 * m['share_of_running']:.0f} % of its running samples, more than "
-                        f"unit_modes.MAX_SHARE {100 * unit_modes.MAX_SHARE:.0f} %): replayed at its measured outlet "
-                        "temperature and flow (its gas from its efficiency), and no effect on it is judged")
+                        f"states differ at {m['samples']} samples, {100 * m['share_of_running']:.0f} % of its running "
+                        f"samples, more than the {m['lab_switches']} at which it switches): replayed at its measured "
+                        "outlet temperature and flow (its gas from its efficiency), and no effect on it is judged")
     simulated = rp.simulated
     for unit, runs in rp.unfollowed.items():
         # the twin's own control runs it (Replayer); its signals, sampled between pulses, are not
@@ -101,8 +101,8 @@ def outlets_of(rp) -> tuple:
 def outlets(p: Prepared) -> dict:
     """{generator: its unit_modes entry} for the generators to replay from their measured outlet
     temperature and flow: those whose running state in the file-valued nominal replay differs
-    from the recording's at more than unit_modes.MAX_SHARE of their running samples (run
-    otherwise than the twin's model runs: a boiler cycling on its own limits), where the recording
+    from the recording's at more samples than it switches (unit_modes.run_otherwise: run otherwise
+    than the twin's model runs, a boiler cycling or locking out on its own limits), where the recording
     measures that outlet and the replay is on a cut. Their heat then reaches the storage as the
     lab's did, and the effects left to judge are those of the rest of the plant."""
     rp, rec = p.replayer, p.ctx.rec

@@ -47,13 +47,20 @@ def test_a_lockout_is_masked_for_the_units_own_signals_only():
     assert before.ok.all()  # a new context; the one given is left as it was
     assert (~ctx.ok[:, 0]).sum() == 5 and (~ctx.ok[:, 1]).sum() == 5 and ctx.ok[:, 2].all()
     assert "mask" not in unit_modes.public(modes)["boiler"]
-    assert not unit_modes.run_otherwise(m)  # an occasional mode: the unit stays simulated
+    # an occasional mode (5 samples, fewer than the 23 at which the lab's boiler switches): the unit
+    # stays simulated
+    assert m["lab_switches"] == 23 and not unit_modes.run_otherwise(m)
+    # the twin's own unit read by a scan one sample late at every switch: as many differing samples
+    # as switches, a timing, not a unit run otherwise
+    late = unit_modes.identify(_Rec({"boiler.Q_flow": np.r_[twin[:1], twin[:-1]]}), rows, {"boiler.Q_flow": 0}.__getitem__,
+                               RAN)["boiler"]
+    assert late["samples"] == late["lab_switches"] == 19 and not unit_modes.run_otherwise(late)
 
 
 def test_a_unit_run_differently_is_not_masked():
     n = 1000
     on = (np.arange(n) // 50) % 2 == 1
-    lab, twin = _boiler(n, on, on & (np.arange(n) % 3 == 0))   # a third of its running samples
+    lab, twin = _boiler(n, on, on & (np.arange(n) % 100 < 67))  # the first third of each run locked out
     modes = unit_modes.identify(_Rec({"boiler.Q_flow": lab}), np.column_stack([twin]),
                                 {"boiler.Q_flow": 0}.__getitem__, RAN)
     m = modes["boiler"]
