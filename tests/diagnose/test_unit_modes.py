@@ -52,8 +52,8 @@ def test_a_lockout_is_masked_for_the_units_own_signals_only():
     assert m["lab_switches"] == 23 and not unit_modes.run_otherwise(m)
     # the twin's own unit read by a scan one sample late at every switch: as many differing samples
     # as switches, a timing, not a unit run otherwise
-    late = unit_modes.identify(_Rec({"boiler.Q_flow": np.r_[twin[:1], twin[:-1]]}), rows, {"boiler.Q_flow": 0}.__getitem__,
-                               RAN)["boiler"]
+    one_late = np.r_[twin[:1], twin[:-1]]
+    late = unit_modes.identify(_Rec({"boiler.Q_flow": one_late}), rows, {"boiler.Q_flow": 0}.__getitem__, RAN)["boiler"]
     assert late["samples"] == late["lab_switches"] == 19 and not unit_modes.run_otherwise(late)
 
 
