@@ -54,7 +54,7 @@ def compile_house(path: str) -> tuple[str, float, str | None]:
 # House 2's are those its rig recording replays (tests/diagnose/test_any_house.py), found by
 # loading every plant a diagnosis of it replays.
 # A cut may also put the boiler at its measured outlet (pipeline.outlets: where the recording runs it
-# otherwise than the twin's model, as every lab and rig recording of the suite does).
+# otherwise than the twin's model; most of the house-1 lab and rig recordings the tests diagnose).
 _MIXING = {"switch.storage_inlet_mixing": 0.025}
 _BOILER = ("boiler",)
 DIAGNOSIS_VARIANTS = (

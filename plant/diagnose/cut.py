@@ -68,13 +68,12 @@ def select(rec, house: str, required: bool = False, generators=()):
 
 def outlet_cuttable(rec, house, unit: str) -> bool:
     """Whether the recording measures a generator's outlet temperature and flow and its kind can
-    run at them (a kind with an `outlet` link: the boiler), so that a cut can (derive.OUTLET)."""
+    run at them (derive.OUTLET_KINDS: the boiler), so that a cut can (derive.OUTLET)."""
     from ..declaration import load
-    from ..kinds import KINDS
-    from .derive import OUTLET
+    from .derive import OUTLET, OUTLET_KINDS
 
     inst = load(house).instances.get(unit)
-    return (inst is not None and "outlet" in KINDS[inst.kind].LINKS
+    return (inst is not None and inst.kind in OUTLET_KINDS
             and all(rec.has(f"{unit}.{recorded}") for _, recorded in OUTLET))
 
 

@@ -57,6 +57,8 @@ SIDES = {
 STATION, DRAW = "mixing_station", "dhw_draw"
 # a generator at its measured outlet (its kind's `outlet = "measured"`): input local -> recorded local
 OUTLET = tuple((local, recorded) for local, recorded, _, _ in Generator.MEASURED_OUTLET)
+# the kinds that can run there: those with an `outlet` link (the boiler's)
+OUTLET_KINDS = tuple(k for k, kind in sorted(KINDS.items()) if "outlet" in kind.LINKS)
 
 
 @dataclass(frozen=True)
@@ -138,9 +140,9 @@ def derive(house, name: str = "circuit", generators=()) -> DerivedCut:
         if g not in inst or KINDS[inst[g].kind].role != "generator":
             raise ConfigError(f"{spec.path}: {g!r} is no generator of {spec.name}; a cut puts a generator's "
                               "measured outlet and flow in its model's place")
-        if "outlet" not in KINDS[inst[g].kind].LINKS:
+        if inst[g].kind not in OUTLET_KINDS:
             raise ConfigError(f"{spec.path}: {g} ({inst[g].kind}) cannot run at a measured outlet; kinds that can: "
-                              + ", ".join(k for k, kind in sorted(KINDS.items()) if "outlet" in kind.LINKS))
+                              + ", ".join(OUTLET_KINDS))
         # the unit stays (its commands, efficiency and counters); its outlet follows the recording
         tables[g] = {"outlet": "measured"}
         bindings.update({f"{g}.{local}": f"{g}.{rec}" for local, rec in OUTLET})
