@@ -163,8 +163,10 @@ class ValveLeakage(UnitEffect):
         on = ctx.mode_mask("heating_on")[: len(rows)]
         closed = on & (rows[:, ctx.index(self.key("y_valve"))] < 0.05)
         if closed.sum() < 0.02 * len(rows):
-            return False, ("the replayed mixing valve is (almost) never closed while the pump runs, "
-                           "so a seat leak cannot show")
+            return False, (f"the replayed mixing valve is (almost) never closed while the pump runs "
+                           f"({int(closed.sum())} of {len(rows)} samples, < 2 %), so a seat leak cannot "
+                           "show; a recording in which the circuit pump runs with the supply set-point "
+                           "below the circuit return (the valve closed) for >= 2 % of it can test one")
         return True, ""
 
     def summary(self, theta, ctx, sim=None):
