@@ -176,7 +176,10 @@ def refit_nominal(ctx, replayer, house: str, refit=None, jobs: int | None = 1) -
                      "bounds": [p.lo, p.hi], "unit": p.unit,
                      "at_bound": at_bound(p, v) and not (q.bounds is not None and v == p.nominal), "why": q.why})
     evaluations = len(cache)  # the re-fit's own; the identifiability's are counted in its entry
-    ident = identifiability(F, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
+
+    def R(theta):  # the residuals whose sum of squares is F(theta)
+        return ctx.weighted_residuals(rp.run(overrides(theta), until=t_end).rows[:, ctx.cols], ctx.train)
+    ident = identifiability(R, [p.name for p in params], [p.lo for p in params], [p.hi for p in params],
                             theta, ctx.n_eff(ctx.train), jobs=jobs)
     return {"parameters": rows, "train_cost_file": J_file, "train_cost_refit": J,
             "evaluations": evaluations, "params": [p for p, q in zip(params, refit) if q.joint],
@@ -229,34 +232,30 @@ MAX_SPAN = 0.5
 MAX_CORR = 0.95
 
 
-def identifiability(F, names, lo, hi, theta, n_eff: float, h: float = 0.05, jobs: int | None = 1) -> dict:
-    """Local identifiability of a calibration at its optimum theta: the Hessian of the cost F in
-    range-normalised coordinates (u = (v - lo) / (hi - lo)) by finite differences (steps h, kept
-    inside the range), the approximate covariance 2 J / n_eff * H^-1 as for every fitted
-    parameter here, each parameter's 1-sigma span as a share of its range and the correlations.
-    The diagonal by central differences, each cross term by a forward difference that reuses the
-    two one-sided points: 1 + 2k + k(k-1)/2 independent replays (not 1 + 2k^2: with the six
-    parameters of the nominal re-fit 28, not 73), in up to `jobs` processes
-    (parallel.map_forked). -> {parameters: [{name, sigma_share_of_range, identifiable}],
-    correlations: {"a|b": r}, identifiable: bool, why}."""
+def identifiability(R, names, lo, hi, theta, n_eff: float, h: float = 0.05, jobs: int | None = 1) -> dict:
+    """Local identifiability of a calibration at its optimum theta. R(values) is the
+    calibration's weighted residual vector, its cost R.R. The cost's Hessian in range-normalised
+    coordinates (u = (v - lo) / (hi - lo)) is taken as Gauss-Newton's 2 J'J, J the residuals'
+    Jacobian by forward differences (steps h, kept inside the range), and the approximate
+    covariance as 2 cost / n_eff * H^-1 as for every fitted parameter here; from it each
+    parameter's 1-sigma span as a share of its range and the correlations. 1 + k independent
+    replays in up to `jobs` processes (parallel.map_forked): the cost's own Hessian by
+    differences took 1 + 2k + k(k-1)/2, 28 with the six parameters of the nominal re-fit, 7 here.
+    -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
+    identifiable: bool, why, evaluations}."""
     from .parallel import map_forked
 
     k = len(theta)
-    # the curvature is taken a step inside the range when the optimum lies on a bound (the
+    # the Jacobian is taken a step inside the range when the optimum lies on a bound (the
     # differences must stay where the model is defined)
-    u0 = np.clip([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)], h, 1.0 - h)
-    E = np.eye(k) * h
-    points = [u0] + [u0 + s * E[i] for i in range(k) for s in (1, -1)]
-    points += [u0 + E[i] + E[j] for i in range(k) for j in range(i)]
-    values = map_forked(lambda n: F([a + x * (b - a) for x, a, b in zip(points[n], lo, hi)]), len(points), jobs)
-    J, plus = values[0], values[1:1 + 2 * k:2]
-    G = iter(values[1:])
-    H = np.zeros((k, k))
-    for i in range(k):
-        H[i, i] = (next(G) - 2.0 * J + next(G)) / h ** 2
-    for i in range(k):
-        for j in range(i):
-            H[i, j] = H[j, i] = (next(G) - plus[i] - plus[j] + J) / h ** 2
+    u0 = np.clip([(v - a) / (b - a) for v, a, b in zip(theta, lo, hi)], 0.0, 1.0 - h)
+    points = [u0] + [u0 + h * np.eye(k)[i] for i in range(k)]
+    values = map_forked(lambda n: np.asarray(R([a + x * (b - a) for x, a, b in zip(points[n], lo, hi)]), float),
+                        len(points), jobs)
+    r0 = np.nan_to_num(values[0])
+    Jac = np.stack([(np.nan_to_num(v) - r0) / h for v in values[1:]], axis=1)
+    J = float(r0 @ r0)
+    H = 2.0 * Jac.T @ Jac
     out = {"parameters": [], "correlations": {}, "identifiable": True, "why": "", "evaluations": len(points)}
     try:
         cov = np.linalg.inv(H) * 2.0 * J / max(n_eff, 1.0)

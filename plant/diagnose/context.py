@@ -174,6 +174,15 @@ class Context:
         idx = [self.measured.index(s) for s in signals if s in self.measured]
         return float(np.nanmean(v[idx] if idx else v))
 
+    def weighted_residuals(self, sim_meas: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """The residuals whose sum of squares is cost(sim_meas, mask): each scored sample of
+        `mask` over its signal's scale and the square root of (its signal's scored samples x the
+        signals scored), 0 where not scored; one fixed layout for every replay of a window."""
+        r = self.residual(sim_meas)[mask[: len(sim_meas)]] / self.scale
+        n = np.sum(np.isfinite(r), axis=0)
+        w = np.where(n > 0, 1.0 / np.sqrt(np.maximum(n, 1) * max(int(np.sum(n > 0)), 1)), 0.0)
+        return np.nan_to_num(r * w).ravel()
+
     def limit(self, j, tol: float = None) -> float | np.ndarray:
         """The one mismatch limit of signal(s) j, in its unit: what a correct replay may leave
         (tol of its scale, MISMATCH_TOL unless given: replay timing, an independent plant's

@@ -221,8 +221,9 @@ def file_values(house: str) -> dict:
 
 
 def _cost(rec, house: str, mask: np.ndarray, elements: int, transform=None):
-    """-> (J(values) = MSE of the recorded return on `mask`, the override keys): values in the
-    order of the circuit's bounds, the simulated return passed through `transform` when given."""
+    """-> (J(values) = MSE of the recorded return on `mask`, the override keys, R(values) = the
+    residuals whose sum of squares is J): values in the order of the circuit's bounds, the
+    simulated return passed through `transform` when given."""
     c = of(house)
     keys = list(c.bounds)
     ret = c.emitter_outputs[0]
@@ -230,12 +231,15 @@ def _cost(rec, house: str, mask: np.ndarray, elements: int, transform=None):
     n = int(np.flatnonzero(mask).max()) + 1
     m = mask[:n] & np.isfinite(meas[:n])
 
-    def J(values):
+    def res(values):
         y = replay(rec, house, dict(zip(keys, values)), n, elements)[ret]
         if transform is not None:
             y = transform(y)
-        return float(np.mean((meas[:n][m] - y[m]) ** 2))
-    return J, keys
+        return meas[:n][m] - y[m]
+
+    def J(values):
+        return float(np.mean(res(values) ** 2))
+    return J, keys, lambda values: res(values) / np.sqrt(max(int(m.sum()), 1))
 
 
 def fit(rec, house: str, mask: np.ndarray, elements: int, start: dict, transform=None) -> tuple:
@@ -246,7 +250,7 @@ def fit(rec, house: str, mask: np.ndarray, elements: int, start: dict, transform
 
     bounds = of(house).bounds
     file = file_values(house)
-    J, keys = _cost(rec, house, mask, elements, transform)
+    J, keys, _ = _cost(rec, house, mask, elements, transform)
     lo = np.array([bounds[q][0] for q in keys])
     hi = np.array([bounds[q][1] for q in keys])
 
@@ -272,9 +276,9 @@ def calibrate(rec, house: str, mask: np.ndarray) -> dict:
     N = min(trials, key=lambda q: trials[q][1])
     values = trials[N][0]
     at = [q for q, v in values.items() if min(abs(v / file[q] - b) for b in c.bounds[q]) < 2e-3]
-    J, keys = _cost(rec, house, mask, N)
+    _, keys, R = _cost(rec, house, mask, N)
     t = rec.time[mask]
-    ident = identifiability(J, keys, [file[q] * c.bounds[q][0] for q in keys],
+    ident = identifiability(R, keys, [file[q] * c.bounds[q][0] for q in keys],
                             [file[q] * c.bounds[q][1] for q in keys], [values[q] for q in keys],
                             max(2.0, (t[-1] - t[0]) / 1800.0))
     return {"elements": N, "values": values, "rms_K": float(np.sqrt(trials[N][1])),

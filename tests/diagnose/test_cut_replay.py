@@ -171,6 +171,20 @@ def test_guideline_14_hourly_figures_follow_their_formula():
     assert math.isclose(g["nmbe_pct"], 100 * e.sum() / ((n - 1) * m.mean()), rel_tol=1e-9)
 
 
+def test_the_weighted_residuals_square_to_the_cost():
+    # the identifiability's Gauss-Newton Jacobian is taken of these: their sum of squares must be
+    # the cost the calibration minimises, unscored samples and an unscored signal included
+    rec = synth.make("none", days=0.5, noise=False)
+    ctx = Context.build(rec, train_days=0.2)
+    rng = np.random.default_rng(3)
+    sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0) + rng.normal(0.0, 0.5, ctx.meas.shape)
+    sim[::7, 2] = np.nan
+    sim[:, ctx.measured.index("boiler.Q_flow")] = np.nan
+    r = ctx.weighted_residuals(sim, ctx.train)
+    assert r.shape == (int(ctx.train.sum()) * len(ctx.measured),) and np.isfinite(r).all()
+    assert math.isclose(float(r @ r), ctx.cost(sim, ctx.train), rel_tol=1e-12)
+
+
 def test_a_radiator_chain_of_any_length_gives_its_rating_at_the_nominal_point():
     # EN 442 nominal point 60/45/21 degC: in steady state at the nominal flow the chain returns
     # 45 degC and emits Q_N, whatever its element count (the element coefficient is solved for it)
@@ -230,13 +244,13 @@ def test_a_circuit_that_never_flows_in_training_keeps_the_file_values_and_says_w
 
 
 def test_identifiability_names_a_flat_parameter_and_a_trade_off():
-    # J = (a + b - 1)^2 + 0.01: a and b trade off; J = (a - 0.3)^2 + 1e-9 c + 0.01: c is flat
-    trade = calibration.identifiability(lambda v: (v[0] + v[1] - 1.0) ** 2 + 0.01 * (v[0] - 0.5) ** 2 + 0.01,
-                                ["a", "b"], [0, 0], [1, 1], [0.5, 0.5], 100.0)
+    # residuals (a + b - 1, 0.1 (a - 0.5), 0.1): a and b trade off; (a - 0.3, 3e-5 c, 0.1): c is flat
+    trade = calibration.identifiability(lambda v: [v[0] + v[1] - 1.0, 0.1 * (v[0] - 0.5), 0.1],
+                                        ["a", "b"], [0, 0], [1, 1], [0.5, 0.5], 100.0)
     assert not trade["identifiable"] and "trade off" in trade["why"] and trade["correlations"]["a|b"] < -0.95
-    flat = calibration.identifiability(lambda v: (v[0] - 0.3) ** 2 + 1e-9 * v[1] ** 2 + 0.01,
-                               ["a", "c"], [0, 0], [1, 1], [0.3, 0.5], 100.0)
+    flat = calibration.identifiability(lambda v: [v[0] - 0.3, math.sqrt(1e-9) * v[1], 0.1],
+                                       ["a", "c"], [0, 0], [1, 1], [0.3, 0.5], 100.0)
     assert [p["identifiable"] for p in flat["parameters"]] == [True, False] and "c:" in flat["why"]
-    sharp = calibration.identifiability(lambda v: (v[0] - 0.3) ** 2 + (v[1] - 0.6) ** 2 + 0.01,
-                                ["a", "b"], [0, 0], [1, 1], [0.3, 0.6], 100.0)
+    sharp = calibration.identifiability(lambda v: [v[0] - 0.3, v[1] - 0.6, 0.1],
+                                        ["a", "b"], [0, 0], [1, 1], [0.3, 0.6], 100.0)
     assert sharp["identifiable"] and sharp["why"] == ""
