@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .sensor_height import best_shift, placed
+from .sensor_height import placed
 from .bounded import at_bound, descent, scalar_search
 from .sim_fit import TrainingCost, along, local_pass, rechoose_scheme
 
@@ -348,12 +348,9 @@ def _unlike(effect, ctx, x: _Tried) -> str:
     m = ctx.train & ctx.ok[:, x.j]
     meas = ctx.meas[:, x.j]
     y1 = effect.apply(ctx.rec.time[:len(x.y0)], x.y0, [x.value])
-    hf = ctx.heights.get(ctx.measured[x.j])
-    e = meas[:len(y1)] - placed(meas, y1, m, hf) + (y1 - x.y0)
+    e = meas[:len(y1)] - placed(meas, y1, m, ctx.heights.get(ctx.measured[x.j])) + (y1 - x.y0)
     mm = m[:len(e)]
-    n = len(y1)
-    place = None if hf is None else (best_shift(meas[:n] - y1, hf.g[:n], m[:n], math.inf), hf.tol)
-    return effect.unlike([x.value], e[mm], {k: f[:len(mm)][mm] for k, f in ctx.states.items()}, place)
+    return effect.unlike([x.value], e[mm], {k: f[:len(mm)][mm] for k, f in ctx.states.items()})
 
 
 def _signal_result(effect, ctx, nominal_sim, best: _Tried, nfev: int, alone: set) -> Result:

@@ -65,12 +65,10 @@ class Effect:
         after it (None: from the cost's curvature)."""
         return None
 
-    def unlike(self, theta, e: np.ndarray, states: dict, place: tuple | None = None) -> str:
+    def unlike(self, theta, e: np.ndarray, states: dict) -> str:
         """kind "signal": '' when the residual e the candidate was fitted to (measured - simulated,
         training samples) has the shape the effect gives in every operating state of states
-        ({name: mask over e}); else why not, in words. place: (shift, tolerance) of a storage
-        sensor's height fitted with the effect, the shift unclipped (None: not a storage
-        sensor). Default: any shape."""
+        ({name: mask over e}); else why not, in words. Default: any shape."""
         return ""
 
     def within(self, theta, limit: float) -> str:

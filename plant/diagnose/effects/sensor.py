@@ -122,17 +122,7 @@ class SensorOffset(Effect):
     def stderr(self, e, n_eff):
         return float(np.std(e) / math.sqrt(n_eff))
 
-    def unlike(self, theta, e, states, place=None):
-        # The offset and its sensor's place are fitted together (solve): a constant and the
-        # tank's gradient. Where the place that goes with the offset lies beyond its sensor's
-        # tolerance, the two do not represent the residual, and the offset is the mean of one it
-        # cannot: a parameter on its bound, refused as every fitted one is (verdict.judge).
-        # Rigsim house 2's null_a: +5.15 K on sensor 2 with its place 3.0 x its tolerance
-        # away; labsim realisation 3's true -3 K on sensor 5: -2.82 K, its place at 0.90 of it.
-        if place is not None and abs(place[0]) >= place[1]:
-            return (f"its sensor's place, fitted with the {theta[0]:+.2f} K offset, lies "
-                    f"{abs(place[0]) / place[1]:.1f} x its height tolerance away: offset and place "
-                    "together do not represent the residual")
+    def unlike(self, theta, e, states):
         v = float(theta[0])
         ok = np.isfinite(e)
         for name, m in states.items():
