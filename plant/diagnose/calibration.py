@@ -240,7 +240,7 @@ def identifiability(R, names, lo, hi, theta, n_eff: float, h: float = 0.05, jobs
     covariance as 2 cost / n_eff * H^-1 as for every fitted parameter here; from it each
     parameter's 1-sigma span as a share of its range and the correlations. 1 + k independent
     replays in up to `jobs` processes (parallel.map_forked): the cost's own Hessian by
-    differences took 1 + 2k + k(k-1)/2, 28 with the six parameters of the nominal re-fit, 7 here.
+    differences took 1 + 2k + k(k-1)/2: 45 with house 1's eight re-fitted parameters, 9 here.
     -> {parameters: [{name, sigma_share_of_range, identifiable}], correlations: {"a|b": r},
     identifiable: bool, why, evaluations}."""
     from .parallel import map_forked
