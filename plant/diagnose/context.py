@@ -148,10 +148,14 @@ class Context:
         return self.roles.catalogue.index(signal)
 
     def mode_mask(self, name: str) -> np.ndarray:
+        """The samples in mode `name` (Roles.modes); none in a mode the house cannot be in (a
+        mode of units it lacks: house 5 has no idle-CHP mode)."""
+        if name not in self.flags:
+            return np.zeros(len(self.rec.time), dtype=bool)
         return self.flags[name]
 
     def mode_share(self, name: str) -> float:
-        return float(np.mean(self.flags[name]))
+        return float(np.mean(self.mode_mask(name)))
 
     # --- costs -----------------------------------------------------------------------------
     def residual(self, sim_meas: np.ndarray) -> np.ndarray:

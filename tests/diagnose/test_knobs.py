@@ -136,6 +136,25 @@ def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_run
     assert r.unfollowed({}) == {}
 
 
+def test_the_idle_chp_candidate_is_refused_where_the_house_has_no_idle_chp_mode():
+    """House 5's switch declares no idle flow through its CHP: the candidate says so rather than
+    asking for a mode the house cannot be in, and such a mode has no samples."""
+    import numpy as np
+
+    from plant.truth import synth
+    from plant.diagnose.context import Context
+    from plant.diagnose.effects.hydraulic import IdleGeneratorFlow
+
+    r = roles_of("house5")
+    data = {u.command: np.ones(50) for u in (*r.generators, *r.circuits, *r.chargers)}
+    ctx = type("Ctx", (), {"flags": r.flags(data)})()
+    ok, why = IdleGeneratorFlow().plausible(ctx)
+    assert not ok and "idle_flow = { chp = ... }" in why
+    house1 = Context.build(synth.make("none", days=0.5, noise=False), train_days=0.2)
+    assert "heat_pump_on" not in house1.flags
+    assert house1.mode_share("heat_pump_on") == 0.0 and house1.mode_mask("heat_pump_on").shape == house1.rec.time.shape
+
+
 def test_a_pulsing_loop_runs_on_the_twins_own_control_and_a_running_one_on_its_recording(tmp_path):
     """A replay holding a pulsing command between samples would run the loop for whole scans;
     the twin's own control runs it instead (its other commands are replayed as before)."""

@@ -43,6 +43,9 @@ class IdleGeneratorFlow(Effect):
         return [0, 1] if ctx.mode_share("chp_on_boiler_on") >= 0.02 else [0]
 
     def plausible(self, ctx):
+        if "chp_off_heating_on" not in ctx.flags:
+            return False, ("the house has no CHP-off-with-heating mode: its coupling point declares no idle "
+                           "flow through the CHP branch (idle_flow = { chp = ... }) or it has no heating circuit")
         share = ctx.mode_share("chp_off_heating_on")
         if share < 0.02:
             return False, "the recording has (almost) no period with the CHP off and the heating pump on"
