@@ -179,6 +179,8 @@ class Kind:
     RUN: tuple | None = None      # (command input, value above which the unit runs): its operating mode
     RAN: tuple | None = None      # (output, value above which it ran): the running state a lab measures
     PIPES: tuple = ()             # outputs read by pipe sensors on its branch (which flows by its m_flow)
+    COUNTER: str | None = None    # output counting what it delivered since the start: it rises between
+    #                               two samples only if the unit ran between them
     SOURCE_PIPES: dict = {}       # output read by a pipe sensor on another loop it runs -> that loop's
     #                               flow, `link.output` (a brine heat pump's brine sensors: collector.m_flow)
     SUBSTITUTES: dict = {}        # command input -> the output a recording may give instead (the RUN

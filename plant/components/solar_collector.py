@@ -246,6 +246,7 @@ class Kind(ComponentKind):
     # the station's pump is the kind's own control: a recording of it drives it (COMMANDS); its
     # supply and return sensors sit on the loop's pipes, which stand while the pump is off
     RUN, PIPES, COMMANDS = ("on", 0.5), ("T_sup", "T_ret"), ("on", "m_flow_set")
+    COUNTER = "E_heat"
     LINKS = {"storage": link(REQUIRED, "the storage the solar coil is in", type=Instance, range=("storage",)),
              "top": link(REQUIRED, "height of the coil inlet [m above the storage bottom], or { upper = ..., "
                                    "lower = ... } for two coils behind the solar valve", type=Valve),

@@ -85,8 +85,9 @@ def prepare(rec, house: str, train_days: float, require_cut: bool, generators: d
         # the twin's own control runs it (Replayer); its signals, sampled between pulses, are not
         # compared, and said so
         simulated = {s for s in simulated if s.split(".", 1)[0] != unit}
-        warnings.append(f"{unit}: its recorded command runs {runs} times, each one sample long: it switches "
-                        f"faster than the recording's scan, which a replay cannot follow; the twin's own "
+        warnings.append(f"{unit}: it runs {runs} times for less than the recording's scan (runs of its "
+                        f"command one sample long, or its counter rising between samples that read it off): "
+                        f"it switches faster than the scan, which a replay cannot follow; the twin's own "
                         f"control runs it and its signals are not compared (record its command or flow "
                         f"faster, or as a run-time count)")
     ctx = Context.build(rec, train_days=train_days, simulated=simulated, roles=rp.roles)

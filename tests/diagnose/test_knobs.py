@@ -136,6 +136,23 @@ def test_a_loop_whose_pump_pulses_faster_than_the_scan_is_named_and_one_that_run
     assert r.unfollowed({}) == {}
 
 
+def test_a_loop_whose_counter_rises_between_samples_that_read_its_pump_off_is_named():
+    """Runs shorter than the scan that no sample caught: the loop's heat counter rises between two
+    samples that both read the pump off (the twin's own house 3 in January)."""
+    import numpy as np
+
+    r = roles_of("house3")
+    off = np.zeros(600)
+    unseen = np.cumsum(np.isin(np.arange(600), [100, 220, 340, 460]) * 5000.0)
+    assert r.unfollowed({"solar.on": off, "solar.E_heat": unseen}) == {"solar": 4}
+    runs = np.zeros(600)
+    runs[100:130] = runs[300:340] = 1.0
+    counted = np.cumsum(runs * 5000.0)            # rises only while the recorded pump runs
+    assert r.unfollowed({"solar.on": runs, "solar.E_heat": counted}) == {}
+    assert r.unfollowed({"solar.on": off, "solar.E_heat": np.zeros(600)}) == {}
+    assert r.unfollowed({"solar.on": off}) == {}   # no counter recorded: nothing to tell
+
+
 def test_the_idle_chp_candidate_is_refused_where_the_house_has_no_idle_chp_mode():
     """House 5's switch declares no idle flow through its CHP: the candidate says so rather than
     asking for a mode the house cannot be in, and such a mode has no samples."""
