@@ -135,7 +135,10 @@ class Roles:
             if lengths.size >= MIN_PULSES and np.median(lengths) <= 1:
                 out[u.name] = int(lengths.size)
             elif u.counter is not None and u.counter in data:
-                unseen = int(np.sum((np.diff(np.asarray(data[u.counter], dtype=float)) > 0) & ~on[:-1] & ~on[1:]))
+                # off at both ends and at the sample before: a meter that books a run's last heat
+                # one scan late is not a run of its own
+                off = ~on[:-1] & ~on[1:] & ~np.concatenate(([False], on[:-2]))
+                unseen = int(np.sum((np.diff(np.asarray(data[u.counter], dtype=float)) > 0) & off))
                 if unseen >= MIN_PULSES:
                     out[u.name] = unseen
         return out

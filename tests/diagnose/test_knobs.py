@@ -146,9 +146,11 @@ def test_a_loop_whose_counter_rises_between_samples_that_read_its_pump_off_is_na
     unseen = np.cumsum(np.isin(np.arange(600), [100, 220, 340, 460]) * 5000.0)
     assert r.unfollowed({"solar.on": off, "solar.E_heat": unseen}) == {"solar": 4}
     runs = np.zeros(600)
-    runs[100:130] = runs[300:340] = 1.0
+    runs[100:130] = runs[300:340] = runs[500:520] = 1.0
     counted = np.cumsum(runs * 5000.0)            # rises only while the recorded pump runs
     assert r.unfollowed({"solar.on": runs, "solar.E_heat": counted}) == {}
+    late = np.cumsum(np.roll(runs, 2) * 5000.0)   # a meter that books each scan's heat one scan late
+    assert r.unfollowed({"solar.on": runs, "solar.E_heat": late}) == {}
     assert r.unfollowed({"solar.on": off, "solar.E_heat": np.zeros(600)}) == {}
     assert r.unfollowed({"solar.on": off}) == {}   # no counter recorded: nothing to tell
 
