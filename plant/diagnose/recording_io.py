@@ -27,6 +27,7 @@ from profiles.recording import write_csv as write_table
 
 from .. import units as unit_table
 from ..errors import ConfigError, DataError, closest
+from .requirements import profile_differs
 
 # plausible range of a converted value per catalogue unit (catches e.g. Kelvin labelled degC)
 PLAUSIBLE = {"degC": (-40.0, 130.0), "kg/s": (-5.0, 5.0), "W": (-2e5, 2e5), "V": (-1.0, 11.0)}
@@ -94,20 +95,46 @@ def load(path: str | Path, mapping: str | Path | None = None, start: str | None 
         warnings.append(f"{rec.dropped_rows} row(s) with the wrong number of fields dropped")
     if raw.shape[0] < 3:
         raise DataError(f"{p}: fewer than 3 samples")
-    if not start:
-        start = house_start
-        warnings.append(f"no start date in the recording or mapping ([recording] start); "
-                        f"assumed the house file's start {start}")
     raw, t = _repair_time(raw, raw[:, header.index("time")], warnings)
     transforms = rec.meta.get("columns", {}) if mapping is not None else {}
     ports = rec.meta.get("ports", {}) if mapping is not None else {}
     _check_ports(ports, mapping, cat)
     data, heights = _convert_columns(raw, header, colmap, units, transforms, mapping, warnings, cat)
+    if not start:
+        start = _start_of(t, data, house_start, warnings)
     _check_places(heights, {sig: col for col, sig in colmap.items()}, mapping)
     valid = _gaps(t, warnings)
     _hold_or_exclude_missing(data, warnings, cat)
     return Samples(str(p), str(start), t, data, warnings, valid,
                    {sig: col for col, sig in colmap.items()}, heights, ports)
+
+
+def _start_of(t: np.ndarray, data: dict, house_start: str, warnings: list) -> str:
+    """A recording without a date: the day of the profile year whose outdoor air the recorded one
+    matches (as the replay's boundary check judges a match), else the house file's start. A twin's
+    own run written by `twin simulate --out` carries its weather but not its date."""
+    from profiles.loaders import YEAR_S, start_offset, weather
+
+    base = f"no start date in the recording or mapping ([recording] start)"
+    T = data.get("weather.T_air")
+    ok = np.isfinite(T) if T is not None else None
+    if T is not None and ok.sum() >= 10 and t[-1] - t[0] < YEAR_S:
+        prof = weather()["T_air"]
+        grid = np.arange(prof.values.size + 1) * prof.step
+        series = np.append(prof.values, prof.values[0])
+        days = np.arange(365) * 86400.0
+        err = np.array([np.sqrt(np.mean((np.interp((d + t[ok]) % YEAR_S, grid, series) - T[ok]) ** 2))
+                        for d in days])
+        k = int(np.argmin(err))
+        y = np.interp((days[k] + t[ok]) % YEAR_S, grid, series)
+        if not profile_differs(float(err[k]), float(np.std(y)), "weather.T_air"):
+            day = (np.datetime64("2021-01-01") + np.timedelta64(k, "D")).astype(str)
+            own = err[int(start_offset(house_start) // 86400) % 365]
+            warnings.append(f"{base}; its weather.T_air matches the weather profile from {day} (RMS {err[k]:.2g} K; "
+                            f"the house file's start {house_start}: {own:.2g} K): started there")
+            return day
+    warnings.append(f"{base}; assumed the house file's start {house_start}")
+    return house_start
 
 
 def _catalogue_columns(p: Path, rec, run: bool, warnings: list, cat) -> tuple[dict, dict]:

@@ -26,7 +26,7 @@ from . import cut as cut_mod
 from . import emitter as emitter_mod
 from . import pipe_sensor, sensor_height
 from . import roles as roles_mod
-from .requirements import BOUNDARY
+from .requirements import BOUNDARY, profile_differs
 
 @dataclass(frozen=True)
 class Replay:
@@ -394,7 +394,7 @@ class Replayer:
                 continue
             err = float(np.sqrt(np.mean((m[ok] - sim[ok]) ** 2)))
             scale = max(1e-9, float(np.std(sim[ok])))
-            if err > 0.2 * scale + (0.5 if b == "weather.T_air" else 0.0):
+            if profile_differs(err, scale, b):
                 warnings.append(f"{b}: the recording differs from the twin's profile for {self.rec.start} "
                                 f"(RMS {err:.3g}); the twin uses its own profiles - check the start date")
         return warnings

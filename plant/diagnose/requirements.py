@@ -15,6 +15,13 @@ BOUNDARY = ("weather.T_air", "weather.E_dir", "weather.E_dif", "occupancy.presen
 NOT_COMPARED_UNITS = ("J", "h", "1", "V", "W/m2")
 
 
+def profile_differs(err: float, scale: float, signal: str) -> bool:
+    """Whether a recorded boundary differs from the twin's profile of it: an RMS difference err
+    beyond a fifth of the profile's own spread scale (the outdoor air 0.5 K more: a sensor's
+    reading of it)."""
+    return err > 0.2 * scale + (0.5 if signal == "weather.T_air" else 0.0)
+
+
 def comparable(house="house1") -> list[str]:
     """Measured plant outputs a recording can be compared on (temperatures, flows, powers)."""
     roles = roles_mod.of(house)
