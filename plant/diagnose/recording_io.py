@@ -115,7 +115,7 @@ def _start_of(t: np.ndarray, data: dict, house_start: str, warnings: list) -> st
     own run written by `twin simulate --out` carries its weather but not its date."""
     from profiles.loaders import YEAR_S, start_offset, weather
 
-    base = f"no start date in the recording or mapping ([recording] start)"
+    base = "no start date in the recording or mapping ([recording] start)"
     T = data.get("weather.T_air")
     ok = np.isfinite(T) if T is not None else None
     if T is not None and ok.sum() >= 10 and t[-1] - t[0] < YEAR_S:
