@@ -41,6 +41,15 @@ class Series:
     step: float
     linear: bool
 
+    def at(self, tau: np.ndarray) -> np.ndarray:
+        """The values at local times tau [s] (an array), wrapping at the series' end, as `sample`
+        gives them one at a time."""
+        tau = np.asarray(tau, dtype=float) % (self.values.size * self.step)
+        if not self.linear:
+            return self.values[np.minimum((tau // self.step).astype(int), self.values.size - 1)]
+        grid = np.arange(self.values.size + 1) * self.step
+        return np.interp(tau, grid, np.append(self.values, self.values[0]))
+
 
 @njit(cache=True)
 def sample(values, step, linear, tau):

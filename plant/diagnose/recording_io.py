@@ -119,14 +119,11 @@ def _start_of(t: np.ndarray, data: dict, house_start: str, warnings: list) -> st
     T = data.get("weather.T_air")
     ok = np.isfinite(T) if T is not None else None
     if T is not None and ok.sum() >= 10 and t[-1] - t[0] < YEAR_S:
-        prof = weather()["T_air"]
-        grid = np.arange(prof.values.size + 1) * prof.step
-        series = np.append(prof.values, prof.values[0])
+        air = weather()["T_air"]
         days = np.arange(365) * 86400.0
-        err = np.array([np.sqrt(np.mean((np.interp((d + t[ok]) % YEAR_S, grid, series) - T[ok]) ** 2))
-                        for d in days])
+        err = np.array([np.sqrt(np.mean((air.at(d + t[ok]) - T[ok]) ** 2)) for d in days])
         k = int(np.argmin(err))
-        y = np.interp((days[k] + t[ok]) % YEAR_S, grid, series)
+        y = air.at(days[k] + t[ok])
         if not profile_differs(float(err[k]), float(np.std(y)), "weather.T_air"):
             day = (np.datetime64("2021-01-01") + np.timedelta64(k, "D")).astype(str)
             own = err[int(start_offset(house_start) // 86400) % 365]

@@ -332,13 +332,10 @@ def test_a_recording_of_house2_is_read_against_house2s_catalogue(tmp_path):
 def test_a_recording_without_a_date_starts_where_its_outdoor_air_matches_the_weather_profile(tmp_path):
     """`twin simulate --out` writes seconds, not dates: the day whose profile air the recorded air
     matches is taken (and said); air that matches no day keeps the house file's start (and says so)."""
-    from profiles.loaders import YEAR_S, start_offset, weather
+    from profiles.loaders import start_offset, weather
 
-    prof = weather()["T_air"]
-    grid = np.arange(prof.values.size + 1) * prof.step
-    series = np.append(prof.values, prof.values[0])
     t = np.arange(60.0, 2 * 86400.0, 60.0)
-    air = np.interp((start_offset("2021-06-15") + t) % YEAR_S, grid, series)
+    air = weather()["T_air"].at(start_offset("2021-06-15") + t)
     for name, T, start, said in (("june", air + 0.1, "2021-06-15", "matches the weather profile from 2021-06-15"),
                                  ("hot", np.full(t.size, 50.0), "2021-01-10", "assumed the house file's start 2021-01-10")):
         csv = tmp_path / f"{name}.csv"
