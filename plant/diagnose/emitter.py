@@ -13,7 +13,8 @@ Each emitter kind is replayed by its own model:
   whose default is 5): its return lags its supply by a spread of residence times that one mixed
   node cannot give. The element count, the rating and the water content are calibrated on the
   recorded return: an independent radiator shares neither its discretisation nor its rating
-  with the house file.
+  with the house file. Uncalibrated (too few flowing samples), it is the house file's radiator,
+  model and values: the kind's own kernel (OWN).
 - a floor by the kind's own kernel (plant/components/floor_heating.step: water and screed as one
   node). Its rating is calibrated on the recorded return; its screed is not, since a screed that
   stores less than the file says is a candidate of its own (effects/units.py SlabCapacity).
@@ -26,7 +27,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..components import floor_heating
+from ..components import floor_heating, radiator
 from ..schedule import n_steps
 from ..water import CP, RHO
 
@@ -37,7 +38,11 @@ RADIATOR_ELEMENTS = (1, 2, 3, 4, 5, 6, 8)
 BOUNDS = {"radiator": {"Q_nominal": (0.6, 1.4), "V_water": (0.2, 2.0)},
           "floor_heating": {"Q_nominal": (0.6, 1.4)}}
 ELEMENTS = {"radiator": RADIATOR_ELEMENTS, "floor_heating": (1,)}
-DEFAULT_ELEMENTS = {"radiator": 5, "floor_heating": 1}
+# an emitter not calibrated runs its kind's own kernel with the house file's values: the model the
+# whole house runs. Before, a radiator kept 5 elements, and the twin's own June recording of house 1
+# (14 flowing samples to train on) read +1.01 K on its return: the chain cools faster once the
+# pump stops, so it met the room, below which neither emits, 1.3 K lower, and held there for 60 h
+OWN = 0
 
 
 @dataclass(frozen=True)
@@ -80,10 +85,6 @@ class Circuit:
     @property
     def elements(self) -> tuple:
         return ELEMENTS[self.kind]
-
-    @property
-    def default_elements(self) -> int:
-        return DEFAULT_ELEMENTS[self.kind]
 
     @property
     def noun(self) -> str:
@@ -170,9 +171,9 @@ def _radiator_run(times, m, T_sup, T_room, x, k, n, C, out):
 
 
 @njit(cache=True)
-def _floor_run(times, m, T_sup, T_room, x, p, out):
-    """The floor's kernel over the samples, measured interfaces linear between samples; out[i] =
-    the water and screed node (the return) at sample i."""
+def _kernel_run(step, times, m, T_sup, T_room, x, p, out):
+    """The emitter kind's own kernel `step` (a floor's water and screed, a radiator's water) over
+    the samples, measured interfaces linear between samples; out[i] = its node (the return)."""
     out[0] = x[0]
     for i in range(1, times.shape[0]):
         t0, t1 = times[i - 1], times[i]
@@ -180,16 +181,16 @@ def _floor_run(times, m, T_sup, T_room, x, p, out):
         h = (t1 - t0) / ns
         for s in range(ns):
             w = (s + 0.5) / ns
-            floor_heating.step(h, x, p, m[i - 1] * (1.0 - w) + m[i] * w, T_sup[i - 1] * (1.0 - w) + T_sup[i] * w,
-                               T_room[i - 1] * (1.0 - w) + T_room[i] * w)
+            step(h, x, p, m[i - 1] * (1.0 - w) + m[i] * w, T_sup[i - 1] * (1.0 - w) + T_sup[i] * w,
+                 T_room[i - 1] * (1.0 - w) + T_room[i] * w)
         out[i] = x[0]
 
 
-def replay(rec, house: str, overrides: dict, n: int, elements: int | None = None) -> dict:
+def replay(rec, house: str, overrides: dict, n: int, elements: int = OWN) -> dict:
     """The emitter of `house` (with its overrides) replayed alone over the first n samples from
     the measured circuit flow, supply and room -> {the station's return: values}. A radiator
-    runs as `elements` elements in series (None: the kind's default); every element, or the
-    floor's node, starts at the first recorded return."""
+    runs as `elements` elements in series (OWN: its kind's kernel); every element, or the kernel's
+    node, starts at the first recorded return."""
     from ..component import pack
     from ..declaration import params_of
 
@@ -201,13 +202,13 @@ def replay(rec, house: str, overrides: dict, n: int, elements: int | None = None
     times = np.ascontiguousarray(rec.time[:n], dtype=np.float64)
     cols = [filled(rec.data[s][:n]) for s in c.emitter_inputs]
     out = np.empty(n)
-    if c.kind == "radiator":
-        N = elements or c.default_elements
+    if c.kind == "radiator" and elements != OWN:
         k = _element_coefficient(prm.Q_nominal, prm.T_sup_nominal, prm.T_ret_nominal, prm.T_room_nominal,
-                                 prm.exponent, N)
-        _radiator_run(times, *cols, np.full(N, T0), k, prm.exponent, CP * RHO * prm.V_water / N, out)
+                                 prm.exponent, elements)
+        _radiator_run(times, *cols, np.full(elements, T0), k, prm.exponent, CP * RHO * prm.V_water / elements, out)
     else:
-        _floor_run(times, *cols, np.array([T0]), pack(prm), out)
+        kernel = radiator.step if c.kind == "radiator" else floor_heating.step
+        _kernel_run(kernel, times, *cols, np.array([T0]), pack(prm), out)
     return {ret: out}
 
 

@@ -143,7 +143,7 @@ class Replayer:
         self.t_train: float | None = None
         # the emitter alone's element count and the instances calibrated on their own subsystem
         # (calibrate_emitter): the nominal re-fit leaves those alone
-        self.emitter_elements = self.heating.default_elements if self.heating else 1
+        self.emitter_elements = emitter_mod.OWN
         self.calibrated: frozenset = frozenset()
         self._layout()
         self.room = self._plant_room()
@@ -342,9 +342,9 @@ class Replayer:
             return None
         mask, skipped = self._circuit_training(
             train, self.heating.emitter_outputs[0], f"{self.heating.noun} alone",
-            f"the {self.heating.noun} alone keeps the house file's values in {self.emitter_elements} element(s)")
+            f"the {self.heating.noun} alone runs the house file's model and values")
         if skipped:
-            return {**skipped, "elements": self.emitter_elements}
+            return skipped
         return {**emitter_mod.calibrate(self.rec, self.house_name, mask), "calibrated": True}
 
     def calibrate_mixer(self, train: np.ndarray) -> dict | None:

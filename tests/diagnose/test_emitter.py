@@ -72,3 +72,24 @@ def test_the_floor_alone_calibration_finds_its_rating():
     assert cal["elements"] == 1 and cal["rms_K"] < 0.07, cal
     assert abs(cal["values"]["floor.Q_nominal"] / truth["floor.Q_nominal"] - 1.0) < 0.03, cal
     assert not cal["at_bound"]
+
+
+def test_a_radiator_not_calibrated_is_the_house_files_own_and_follows_the_twins_return():
+    # a June day of the twin's house 1: the circuit flows at 15 samples, too few to calibrate the
+    # radiator alone, which then runs the house file's kernel and values and reads the twin's own
+    # return within 0.1 K (the twin steps at 1 s, the replay between 60 s samples). A chain of
+    # 5 elements, what it ran before, cooled faster after the run and was 3 K off
+    from plant.house import load_house
+
+    h = load_house("house1", start="2021-06-15")
+    times, rows = h.run(86400.0, dt=1.0, out_interval=60.0)
+    c = emitter.of("house1")
+    names = (*c.emitter_inputs, *c.emitter_outputs)
+    rec = Samples("twin", "2021-06-15", times, {s: rows[:, h.catalogue.index(s)] for s in names})
+    n = len(times)
+    flowing = rec.data["mixer.m_flow"] > 1e-3
+    assert 0 < flowing.sum() < 30
+    own = emitter.replay(rec, "house1", {}, n)["mixer.T_ret"]
+    chain = emitter.replay(rec, "house1", {}, n, 5)["mixer.T_ret"]
+    assert np.abs(own - rec.data["mixer.T_ret"]).max() < 0.1
+    assert np.abs(chain - rec.data["mixer.T_ret"]).max() > 2.0
