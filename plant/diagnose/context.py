@@ -78,6 +78,8 @@ class Context:
     calibrated: tuple = ()
     nominal_ranges: dict = field(default_factory=dict)
     calibration: dict = field(default_factory=dict)  # override key -> the value every replay starts from
+    # storage sensors the nominal replay cannot represent (unrepresented.find): sensor -> its entry
+    unrepresented: dict = field(default_factory=dict)
 
     @classmethod
     def build(cls, rec, train_days: float = 2.0, warmup_h: float = 1.0, simulated=None, roles=None):

@@ -12,7 +12,7 @@ modes masked another (unit_modes.apply). `diagnose` runs them in order and times
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from . import calibration, fit, forward, locate, parallel, pipe_sensor, replay, requirements, search, unit_modes
 from . import cut as cut_mod
@@ -155,6 +155,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
     alone = ((({"instances": {hc.station}, "signals": list(hc.station_outputs)},) if rp.circuit else ())
              + (({"instances": {hc.emitter}, "signals": list(hc.emitter_outputs)},) if rp.emitter else ()))
     ctx = ctx.with_baseline(nominal, alone, calibrated, ranges, rp.base)
+    ctx = replace(ctx, unrepresented=unrepresented.find(ctx, ctx.nominal_sim))
     J0t, J0h = ctx.cost(ctx.nominal_sim, ctx.train), ctx.cost(ctx.nominal_sim, ctx.held)
     log(f"nominal replay: training cost {J0t:.4g}, held-out cost {J0h:.4g} "
         f"({len(ctx.measured)} measured signals)")
@@ -249,7 +250,7 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
                                   "named_model": pipe_sensor.public(named[flow]) if flow in named else None}
                            for flow, f in b.nominal.pipe.items()}
     rep["unit_modes"] = unit_modes.public(b.modes)
-    rep["unrepresented_sensors"] = unrepresented.find(ctx, ctx.nominal_sim)
+    rep["unrepresented_sensors"] = ctx.unrepresented
     # in the catalogue's order: the fit keeps them in a set's, which differs between runs
     rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]])
                                     for sig, h in sorted(b.nominal.heights.items(),

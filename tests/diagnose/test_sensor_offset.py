@@ -140,3 +140,40 @@ def test_an_offset_where_the_tank_is_steep_is_judged_with_the_place_fitted_with_
     before = sensor_height.placed(ctx.meas[:, j], sim[:, j], m, ctx.heights[s])
     e = ctx.meas[m, j] - before[m]
     assert OFFSET.unlike([-2.0], e, {k: f[m] for k, f in ctx.states.items()}).startswith("not constant")
+
+
+def test_no_offset_is_named_on_a_sensor_the_twin_cannot_represent():
+    """A sensor at a port reads the port's water in some states and its layer in others: against
+    the nominal replay +0.8 K with the heating on, -2 K with it off, beyond its limit both ways
+    (unrepresented.find). With its place fitted together with an offset (a steep tank while the
+    heating is on), the offset's shape check passes, as it did for rigsim house 2's sensor 2
+    (+5.15 K named on null_a); one value cannot be such a sensor's error, so the offset is not
+    named on it (Context.unrepresented, fit._unlike)."""
+    from dataclasses import replace
+
+    from plant.diagnose import unrepresented
+    from plant.diagnose.replay import Replay
+    from plant.diagnose.sensor_height import HeightFit
+
+    rec = synth.make("none", days=1.0, noise=False)
+    ctx = Context.build(rec, train_days=0.5)
+    s = "storage.T_sensor_5"
+    j = ctx.measured.index(s)
+    sim = np.where(np.isfinite(ctx.meas), ctx.meas, 0.0)
+    on = ctx.flags["heating_on"]
+    sim[:, j] -= np.where(on, 0.8, -2.0)
+    g = np.where(on, 100.0, 0.0)                         # K per tank height: a 2.8 cm shift reads 2.8 K
+    rows = np.zeros((len(sim), max(ctx.cols) + 1))
+    rows[:, ctx.cols] = sim
+    ctx = ctx.with_baseline(Replay(rows, heights={s: HeightFit(0.0, 0.03, g)}), (), (), {})
+    found = unrepresented.find(ctx, sim)
+    assert list(found) == [s]
+    assert fit.fit_signal(OFFSET, ctx, sim, only=s).local["unlike"] == ""   # the shape check alone
+    ctx = replace(ctx, unrepresented=found)
+    r = fit.fit_signal(OFFSET, ctx, sim, only=s)
+    assert r.local["unlike"].startswith(f"{s} cannot be represented by the twin: relative to its neighbours")
+    assert not verdict._judged_local(r, n_eff=100.0).accepted
+    assert fit.fit_signal(OFFSET, ctx, sim).signal != s
+    # a lag may still be named there: its residual changes sign with the tank's rise and fall
+    lag = next(e for e in catalogue() if e.id == "sensor_lag")
+    assert not lag.same_in_every_state and OFFSET.same_in_every_state

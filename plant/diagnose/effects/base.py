@@ -47,6 +47,9 @@ class Effect:
     description: str = ""
     available: bool = True  # False: declared but not testable with the current twin (reason in description)
     signal_units: tuple = ("degC",)  # kind "signal": which measured signals it may apply to
+    # kind "signal": the effect reads the same in every operating state (an offset), so it is not
+    # named on a sensor whose residual takes both signs by state (Context.unrepresented)
+    same_in_every_state: bool = False
 
     def overrides(self, theta) -> dict:
         raise NotImplementedError

@@ -101,6 +101,7 @@ class SensorOffset(Effect):
     kind = "signal"
     params = (Param("offset", -10.0, 10.0, 0.0, "K"),)
     description = "constant offset of a sensor (calibration)"
+    same_in_every_state = True
 
     def apply(self, t, y, theta):
         return y + float(theta[0])
