@@ -141,8 +141,8 @@ class Replayer:
         # the end of the training window: the pipe sensors' cooling time models and the storage
         # sensors' places are fitted up to it (pipe_sensor.py, sensor_height.py)
         self.t_train: float | None = None
-        # the emitter alone's element count and the instances calibrated on their own subsystem
-        # (calibrate_emitter): the nominal re-fit leaves those alone
+        # the emitter alone's element count (until calibrated emitter.OWN, its kind's kernel) and
+        # the instances calibrated on their own subsystem: the nominal re-fit leaves those alone
         self.emitter_elements = emitter_mod.OWN
         self.calibrated: frozenset = frozenset()
         self._layout()

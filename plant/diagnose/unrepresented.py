@@ -10,12 +10,12 @@ off, in every case of the suite, the no-effect ones included.
 Such a sensor is reported (report.json `unrepresented_sensors`) with what it reads in each
 state, found once on the nominal replay (Context.unrepresented), and no effect that reads the
 same in every state (an offset: Effect.same_in_every_state) is named on it (fit._unlike): one
-value cannot be the error of a reading that takes both signs. Its offset's own shape check in
+value cannot be the error of a reading that takes both signs. The offset's own shape check in
 every state (SensorOffset.unlike) is weaker where the sensor's place is fitted with the offset:
 rigsim house 2's null_a named +5.15 K on sensor 2 through it. A lag, whose residual changes sign
 with the tank's rise and fall, may still be named on such a sensor (labsim's and rigsim's lagging
-top sensors are found here). The limit is the one mismatch limit of
-the signal (Context.limit): a state mean beyond it, with either sign, in states that each
+top sensors are listed here). The limit is the one mismatch limit of the signal
+(Context.limit): a state mean beyond it, with either sign, in states that each
 cover at least STATE_SHARE of the recording (the sensor offset's own, effects/sensor.py), both
 relative to its neighbours and of its own reading (a neighbour's relative residual mirrors it).
 """
