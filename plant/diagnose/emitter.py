@@ -21,13 +21,14 @@ Each emitter kind is replayed by its own model:
 """
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 from numba import njit
 
-from ..components import floor_heating, radiator
+from ..kinds import KINDS
 from ..schedule import n_steps
 from ..water import CP, RHO
 
@@ -207,7 +208,8 @@ def replay(rec, house: str, overrides: dict, n: int, elements: int = OWN) -> dic
                                  prm.exponent, elements)
         _radiator_run(times, *cols, np.full(elements, T0), k, prm.exponent, CP * RHO * prm.V_water / elements, out)
     else:
-        kernel = radiator.step if c.kind == "radiator" else floor_heating.step
+        # the kernel the kind declares its emitter calls (Kind.KERNEL: the module of its step)
+        kernel = importlib.import_module(KINDS[c.kind].KERNEL).step
         _kernel_run(kernel, times, *cols, np.array([T0]), pack(prm), out)
     return {ret: out}
 

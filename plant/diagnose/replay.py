@@ -366,7 +366,7 @@ class Replayer:
         h = self.heating
         ov = {k: v for k, v in {**self.base, **values}.items() if k.startswith(f"{h.emitter}.")}
         y = emitter_mod.replay(self.rec, self.house_name, ov, len(self.t),
-                               elements or self.emitter_elements)[h.emitter_outputs[0]]
+                               self.emitter_elements if elements is None else elements)[h.emitter_outputs[0]]
         flow = h.emitter_inputs[0]
         fit = pipe.get(flow, pipe_sensor.AS_SIMULATED_FIT)
         return pipe_sensor.cooled(self.t, y, self.rec.data[flow], fit, self.room.T)
