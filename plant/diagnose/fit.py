@@ -24,7 +24,7 @@ import numpy as np
 
 from .sensor_height import placed
 from .bounded import at_bound, descent, scalar_search
-from .sim_fit import TrainingCost, along, local_pass, rechoose_scheme
+from .sim_fit import TrainingCost, along, local_pass, own as _own, rechoose_scheme, stderr as _stderr
 
 JOINT_REFIT = True   # re-fit the nominal knobs (calibration.knobs) jointly with each simulate candidate (else: kept fixed)
 
@@ -69,38 +69,6 @@ class Result:
                 "evaluations": self.evaluations, "nominal_refit": dict(self.nominal),
                 "parameters_at_bound": list(self.at_bound), "relative_to_neighbours": self.local,
                 "fit_note": self.fit_note}
-
-
-def _stderr(f, p, theta, J, n_eff):
-    """Approximate standard error from the cost curvature: var = 2 J / (n_eff J'')."""
-    h = 0.05 * (p.hi - p.lo) if not p.log else theta * 0.1
-    lo, hi = max(p.lo, theta - h), min(p.hi, theta + h)
-    if hi - lo <= 0:
-        return math.nan
-    Jl, Jh = f(lo), f(hi)
-    # quadratic through three points
-    x = np.array([lo, theta, hi])
-    y = np.array([Jl, J, Jh])
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        try:
-            c = np.polyfit(x - theta, y, 2)[0]
-        except Exception:  # noqa: BLE001
-            return math.nan
-    if c <= 0:
-        return math.nan
-    return float(math.sqrt(2.0 * J / (n_eff * 2.0 * c)))
-
-
-def _own(F, params, free, theta) -> float:
-    """The candidate's own parameters (`free`) fitted in place in theta, the rest held: grid +
-    Brent each, then a local pass over them; returns the training cost."""
-    J = math.nan
-    for i in free:
-        theta[i], J, _ = scalar_search(along(F, theta, i), params[i])
-    if len(free) > 1:
-        J = local_pass(F, params, free, theta, J)
-    return J
 
 
 def stops_running(ctx, rows) -> str:

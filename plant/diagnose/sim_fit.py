@@ -1,11 +1,16 @@
-"""The pieces of fit.fit_simulate: a simulate candidate's training cost, memoised, and the passes
-over its parameters after the first coordinate search (a local Brent pass, the storage scheme
-chosen again with the candidate)."""
+"""The pieces of fit.fit_simulate: a simulate candidate's training cost, memoised, its own
+parameters' coordinate search (own) and standard errors (stderr), and the passes over its
+parameters after the first coordinate search (a local Brent pass, the storage scheme chosen again
+with the candidate)."""
 from __future__ import annotations
 
+import math
+import warnings
+
+import numpy as np
 from scipy.optimize import minimize_scalar
 
-from .bounded import from_u, to_u
+from .bounded import from_u, scalar_search, to_u
 from .calibration import STORAGE_SCHEMES, file_scheme
 
 
@@ -44,6 +49,38 @@ def along(F, theta: list, i: int):
         th[i] = v
         return F(th)
     return f
+
+
+def stderr(f, p, theta, J, n_eff):
+    """Approximate standard error from the cost curvature: var = 2 J / (n_eff J'')."""
+    h = 0.05 * (p.hi - p.lo) if not p.log else theta * 0.1
+    lo, hi = max(p.lo, theta - h), min(p.hi, theta + h)
+    if hi - lo <= 0:
+        return math.nan
+    Jl, Jh = f(lo), f(hi)
+    # quadratic through three points
+    x = np.array([lo, theta, hi])
+    y = np.array([Jl, J, Jh])
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            c = np.polyfit(x - theta, y, 2)[0]
+        except Exception:  # noqa: BLE001
+            return math.nan
+    if c <= 0:
+        return math.nan
+    return float(math.sqrt(2.0 * J / (n_eff * 2.0 * c)))
+
+
+def own(F, params, free, theta) -> float:
+    """The candidate's own parameters (`free`) fitted in place in theta, the rest held: grid +
+    Brent each, then a local pass over them; returns the training cost."""
+    J = math.nan
+    for i in free:
+        theta[i], J, _ = scalar_search(along(F, theta, i), params[i])
+    if len(free) > 1:
+        J = local_pass(F, params, free, theta, J)
+    return J
 
 
 def local_pass(F, params, free, theta: list, J: float) -> float:
