@@ -24,7 +24,8 @@ import numpy as np
 
 from .sensor_height import placed
 from .bounded import at_bound, descent, scalar_search
-from .sim_fit import TrainingCost, along, local_pass, own as _own, rechoose_scheme, stderr as _stderr
+from .sim_fit import (TrainingCost, along, local_pass, own as _own, rechoose_scheme, stderr as _stderr,
+                      without_unidentified)
 
 JOINT_REFIT = True   # re-fit the nominal knobs (calibration.knobs) jointly with each simulate candidate (else: kept fixed)
 
@@ -136,6 +137,11 @@ def fit_simulate(effect, ctx, replayer, nominal_cost, nominal=None) -> Result:
     n_eff = ctx.n_eff(ctx.train)
     se = [_stderr(along(F, theta, i), params[i], theta[i], J, n_eff) if i in free else math.nan
           for i in range(len(params))]
+    if (fewer := without_unidentified(F, params, free, theta, J, se, n_eff)) is not None:
+        dropped = ", ".join(f"{params[i].name} {theta[i]:.3g} +- {se[i]:.2g}" for i in free if i not in fewer[0])
+        note = (note + "; " if note else "") + f"{dropped} not told from nominal: fitted without it (better BIC)"
+        free, theta, J, se = fewer
+        run = replayer.run(F.overrides(theta))
     rows = run.rows
     sim = rows[:, ctx.cols]
     return Result(effect.id, effect.component, effect.kind, True, theta=list(theta[:ne]), stderr=se,
