@@ -114,6 +114,12 @@ def rechoose_scheme(F, replayer, theta: list, J: float) -> float:
     return best[1]
 
 
+def bic(cost: float, n_eff: float, k: int) -> float:
+    """The Bayesian information criterion of a training cost (a mean square) over n_eff effective
+    samples with k fitted parameters: the criterion verdict.judge holds a candidate to."""
+    return n_eff * math.log(max(cost, 1e-12)) + k * math.log(n_eff)
+
+
 def without_unidentified(F, params, free, theta: list, J: float, se: list, n_eff: float):
     """The candidate fitted again without its companion parameters (free after the first, the
     effect's size) that the fit cannot tell from their nominal value (within one standard error,
@@ -127,8 +133,7 @@ def without_unidentified(F, params, free, theta: list, J: float, se: list, n_eff
     fewer = [i for i in free if i not in weak]
     th = [params[i].nominal if i in weak else v for i, v in enumerate(theta)]
     Jr = own(F, params, fewer, th)
-    if n_eff * math.log(max(Jr, 1e-12)) + len(fewer) * math.log(n_eff) >= \
-            n_eff * math.log(max(J, 1e-12)) + len(free) * math.log(n_eff):
+    if bic(Jr, n_eff, len(fewer)) >= bic(J, n_eff, len(free)):
         return None
     return fewer, th, Jr, [stderr(along(F, th, i), params[i], th[i], Jr, n_eff) if i in fewer else math.nan
                            for i in range(len(params))]

@@ -24,14 +24,11 @@ import numpy as np
 
 from .bounded import at_bound
 from .fit import LOCAL_GAIN
+from .sim_fit import bic
 
 MIN_GAIN = 0.10
 EXPLAIN = 0.60
 PARSIMONY = 0.02
-
-
-def bic(cost: float, n_eff: float, k: int) -> float:
-    return n_eff * math.log(max(cost, 1e-12)) + k * math.log(n_eff)
 
 
 def within_calibration(r, ctx) -> str:

@@ -187,7 +187,7 @@ def test_no_offset_is_named_on_a_sensor_the_twin_cannot_represent():
     (1.29, 0.59, True),    # rigsim r1 sensor_offset_p1_5: the true +1.5 K, within its limit after
     (3.07, 0.62, True),    # rigsim r1 sensor_offset_m3: the true -3 K, 100 %
 ])
-def test_a_sensor_effect_that_leaves_most_of_its_residuals_excess_is_not_named(before, after, accepted):
+def test_an_offset_that_leaves_most_of_its_residuals_excess_is_not_named(before, after, accepted):
     """An offset judged on its own residual relative to its neighbours must remove EXPLAIN
     of that residual's excess over its limit: the limit is that residual's accuracy (the plant
     replay's few K, which a plant candidate is held to, do not apply to it). The figures are the
