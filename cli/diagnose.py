@@ -48,6 +48,10 @@ def run(args) -> int:
         return 0
     if not args.recording:
         raise ConfigError("twin diagnose: --recording is required (or --requirements HOUSE)")
+    if not args.train_days > 0:
+        # a window of no days was replaced by the covering split's few hours without a word
+        raise ConfigError(f"twin diagnose: --train-days {args.train_days:g}: the training window needs more than 0 "
+                          "days (default 2; the rest of the recording is held out)")
     for f in args.effects:
         spec = importlib.util.spec_from_file_location(f"user_effects_{f.stem}", f)
         if spec is None or not f.exists():

@@ -343,3 +343,13 @@ def test_a_recording_without_a_date_starts_where_its_outdoor_air_matches_the_wea
         r = recording_io.load(csv)
         assert r.start == start
         assert any(said in w and "no start date" in w for w in r.warnings), r.warnings
+
+
+@pytest.mark.parametrize("days", ["0", "-1", "nan"])
+def test_a_training_window_of_no_days_is_refused_naming_the_fix(tmp_path, rec, capsys, days):
+    from cli.main import main
+
+    csv, m = _write(tmp_path, rec)
+    assert main(["diagnose", "--recording", str(csv), "--map", str(m), "--train-days", days]) != 0
+    err = capsys.readouterr().err
+    assert f"--train-days {float(days):g}: the training window needs more than 0 days (default 2" in err
