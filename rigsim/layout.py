@@ -17,7 +17,8 @@ CP = 4186.0  # J/(kg K), water
  I_M_CHG, I_IDLE_K,
  I_TAU_PROBE, I_TAU_ROOM, I_M_HCS, I_TAU_HCS,
  I_T_COLD, I_T_DHW, I_HC_TSET, I_T_DAY, I_T_NIGHT, I_BOI_TMAX,
- N_PARAM) = range(61)
+ I_HC_RUNON, I_HC_TCLOSE, I_HC_FRUNON,
+ N_PARAM) = range(64)
 
 N_CH = 38
 # channel indices (order of house1-channels.csv without t_s)
@@ -41,9 +42,10 @@ C_WWS0 = 17      # WWS_T1..3 -> 17..19
 
 # integer states: PLC commands and the generators' run and lock-out flags
 (S_CHP_CMD, S_BOI_CMD, S_DHW_CMD, S_HC_ON, S_CHP_RUN, S_BOI_RUN, S_BOI_LOCK, N_ISTATE) = range(8)
-# float states: PLC outputs, generator switching times and last flows, mixing-valve PI
+# float states: PLC outputs, generator switching times and last flows, mixing-valve PI, the
+# circuit's supply set-point and the seconds of its pump run-on left
 (F_FLOW_SET, F_SOC, F_CHP_TON, F_CHP_TOFF, F_CHP_MLAST, F_M_C_PREV,
- F_BOI_TON, F_BOI_TOFF, F_BOI_MLAST, F_M_B_PREV, F_U, F_I_V, N_FSTATE) = range(13)
+ F_BOI_TON, F_BOI_TOFF, F_BOI_MLAST, F_M_B_PREV, F_U, F_I_V, F_TSET, F_HC_RUN, N_FSTATE) = range(15)
 
 # probe states: thermowells of pipes, headers and circuit return, circuit supply pipe, room
 (PR_CS, PR_CR, PR_BS, PR_BR, PR_SH, PR_RH, PR_HCR, PR_HCS, PR_ROOM, N_PROBE) = range(10)

@@ -258,6 +258,9 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
     P[core.I_T_COLD] = T_COLD
     P[core.I_T_DHW] = DHW_SET
     P[core.I_HC_TSET] = 60.0
+    P[core.I_HC_RUNON] = 600.0   # s, the PLC's circuit pump run-on
+    P[core.I_HC_TCLOSE] = 20.0   # degC, the set-point that closes the valve during it
+    P[core.I_HC_FRUNON] = 3.0    # l/min, the pump's minimum flow
     P[core.I_T_DAY] = 21.0
     P[core.I_T_NIGHT] = 18.0
 

@@ -10,7 +10,7 @@ from .layout import (
     A_CHP_STATE, A_M_CHP, A_M_TANK, A_Q_RAD, A_SOC, A_U_VALVE, C_BT0, C_CB_FLOW, C_CB_MOD, C_CB_PGAS,
     C_CB_QTH, C_CB_TRL, C_CB_TVL, C_CHP_MOD, C_CHP_ON, C_CHP_PEL, C_CHP_PGAS, C_CHP_QTH, C_CHP_TRL,
     C_CHP_TVL, C_DHW_CHG, C_DHW_CMD, C_DHW_TAP, C_HC_FLOW, C_HC_FSET, C_HC_TRL, C_HC_TSET, C_HC_TVL,
-    C_HDR_TRL, C_HDR_TVL, C_OUT, C_ROOM, C_WWS0, CP, F_FLOW_SET, I_HC_TSET, I_M_HCS, I_TAU_HCS, I_TAU_PROBE,
+    C_HDR_TRL, C_HDR_TVL, C_OUT, C_ROOM, C_WWS0, CP, F_FLOW_SET, F_TSET, I_M_HCS, I_TAU_HCS, I_TAU_PROBE,
     I_TAU_ROOM, N_A, N_BOI, N_CH, N_CHP, N_PBR, N_PBS, N_PCR, N_PCS, N_PROBE, N_RH, N_SH, PR_BR, PR_BS,
     PR_CR, PR_CS, PR_HCR, PR_HCS, PR_RH, PR_ROOM, PR_SH, S_BOI_CMD, S_CHP_CMD, S_DHW_CMD,
 )
@@ -79,7 +79,7 @@ def fill_channels(ch, P, ist, fst, sb, sd, pr, nodes, T_out, P_el, P_gas_c, m_c,
     ch[C_CHP_MOD] = 100.0 * ist[S_CHP_CMD]
     ch[C_CB_MOD] = 100.0 * ist[S_BOI_CMD]
     ch[C_DHW_CMD] = ist[S_DHW_CMD]
-    ch[C_HC_TSET] = P[I_HC_TSET]
+    ch[C_HC_TSET] = fst[F_TSET]
     ch[C_HC_FSET] = fst[F_FLOW_SET]
     ch[C_OUT] = T_out
     for i in range(10):

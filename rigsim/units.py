@@ -8,10 +8,10 @@ import numpy as np
 from numba import njit
 
 from .layout import (
-    CP, F_BOI_MLAST, F_BOI_TOFF, F_BOI_TON, F_CHP_MLAST, F_CHP_TOFF, F_CHP_TON, F_FLOW_SET, F_I_V,
-    F_M_B_PREV, F_M_C_PREV, F_SOC, F_U, I_BOI_DT, I_BOI_ETAMAX, I_BOI_HF, I_BOI_KP, I_BOI_MMAX,
+    CP, F_BOI_MLAST, F_BOI_TOFF, F_BOI_TON, F_CHP_MLAST, F_CHP_TOFF, F_CHP_TON, F_FLOW_SET, F_HC_RUN,
+    F_I_V, F_M_B_PREV, F_M_C_PREV, F_SOC, F_TSET, F_U, I_BOI_DT, I_BOI_ETAMAX, I_BOI_HF, I_BOI_KP, I_BOI_MMAX,
     I_BOI_MMIN, I_BOI_PNOM, I_BOI_RUNON, I_BOI_TMAX, I_CHP_ETAEL, I_CHP_KP, I_CHP_MMAX, I_CHP_MMIN,
-    I_CHP_PELMAX, I_CHP_RUNON, I_CHP_TREG, I_HC_TSET, I_IDLE_K, I_KI_V, I_KP_V, I_LEAK, I_M_CHG,
+    I_CHP_PELMAX, I_CHP_RUNON, I_CHP_TREG, I_HC_FRUNON, I_HC_RUNON, I_HC_TCLOSE, I_HC_TSET, I_IDLE_K, I_KI_V, I_KP_V, I_LEAK, I_M_CHG,
     I_PUMP_MAX, I_T_DAY, I_T_NIGHT, I_T_RUN, N_BOI, N_CHP, N_PBR, N_PCR, S_BOI_CMD, S_BOI_LOCK,
     S_BOI_RUN, S_CHP_CMD, S_CHP_RUN, S_DHW_CMD, S_HC_ON,
 )
@@ -73,10 +73,20 @@ def plc(P, ist, fst, sb, sd, hour, s_room):
         ist[S_HC_ON] = 1
     elif ist[S_HC_ON] == 1 and d < -0.3:
         ist[S_HC_ON] = 0
+        fst[F_HC_RUN] = P[I_HC_RUNON]
     if ist[S_HC_ON] == 1:
         fst[F_FLOW_SET] = min(15.0, max(3.0, 3.0 + 12.0 * d / 1.5))
+        fst[F_TSET] = P[I_HC_TSET]
+        fst[F_HC_RUN] = 0.0
+    elif fst[F_HC_RUN] > 0.0:
+        # pump run-on: the set-point drops so that the valve drives closed while the pump still
+        # circulates the circuit at its minimum flow (the rig description, section 4)
+        fst[F_HC_RUN] -= 1.0
+        fst[F_FLOW_SET] = P[I_HC_FRUNON]
+        fst[F_TSET] = P[I_HC_TCLOSE]
     else:
         fst[F_FLOW_SET] = 0.0
+        fst[F_TSET] = P[I_HC_TSET]
 
 
 @njit(cache=True, inline="always")
@@ -146,9 +156,9 @@ def consumers(P, dt, ist, fst, T_hcs, chp_state, m_c, m_b):
     the mixing station (PI on its supply sensor, actuator with a running time), the flow a
     standing CHP passes, and the net flow into the tank top (> 0: surplus)."""
     m_dhw = P[I_M_CHG] if ist[S_DHW_CMD] == 1 else 0.0
-    m_hc = min(fst[F_FLOW_SET] / 60.0, P[I_PUMP_MAX]) if ist[S_HC_ON] == 1 else 0.0
+    m_hc = min(fst[F_FLOW_SET] / 60.0, P[I_PUMP_MAX])
     if m_hc > 0.0:
-        e = P[I_HC_TSET] - T_hcs
+        e = fst[F_TSET] - T_hcs
         v = P[I_KP_V] * e + fst[F_I_V]
         if (v > 0.0 or e > 0.0) and (v < 1.0 or e < 0.0):
             fst[F_I_V] += P[I_KI_V] * e * dt

@@ -50,3 +50,23 @@ def test_idle_flow_only_through_a_standing_chp():
     assert st.any() and r.aux[st, 0].max() > 0.0
     assert r.effect_size["idle_chp_flow_mean_kg_s"] > 0.0
     assert r.closure < 1e-6
+
+
+def test_valve_leak_shows_during_the_pump_run_on(base):
+    # the PLC's run-on drives the valve closed with the pump running: the tight valve's supply
+    # falls to the circuit return, a leaking one keeps mixing in header water
+    n = NAMES.index
+    r = _run(valve_leak=0.2)
+
+    def closed(x):
+        flow, tset = x.rec[:, n("HC_FLOW")], x.rec[:, n("HC_TSUP_SET")]
+        m = (flow > 0.5) & (tset < 30.0)
+        assert m.mean() > 0.02 and np.all(flow[m] < 3.5)   # the run-on's minimum flow, 3 l/min
+        return m
+
+    def rise(x):
+        m = closed(x)
+        return np.median(x.rec[m, n("HC_TVL")] - x.rec[m, n("HC_TRL")])
+
+    assert rise(base) < 1.0 < 4.0 < rise(r)
+    assert r.closure < 1e-6
