@@ -167,11 +167,12 @@ def replay_circuit(rec, house: str, overrides: dict, n: int) -> dict:
 STATION_BOUNDS = {"t_stroke": (1.0, 600.0), "K_i": (1e-5, 1e-2)}  # s, 1/(K s); log scale
 
 
-def calibrate_mixer(rec, house: str, mask: np.ndarray) -> dict:
+def calibrate_mixer(rec, house: str, mask: np.ndarray, overrides: dict | None = None) -> dict:
     """The mixing station alone calibrated on the recorded supply after mixing over `mask` (the
     training window's flowing samples): STATION_BOUNDS on their log scale, a 6 x 6 grid then
     Nelder-Mead from its best point (the two trade off along a valley that a coordinate pass
-    crawls). -> {values {override: value}, rms_K, rms_file_K, at_bound, file_values, bounds}."""
+    crawls); `overrides` (a candidate's) held. -> {values {override: value}, rms_K, rms_file_K,
+    at_bound, file_values, bounds}."""
     from scipy.optimize import minimize
 
     from ..declaration import load
@@ -192,7 +193,7 @@ def calibrate_mixer(rec, house: str, mask: np.ndarray) -> dict:
 
     def J(u):  # u: log values; outside the bounds: clipped, plus a penalty
         v = np.clip(u, lo, hi)
-        y = replay_circuit(rec, house, dict(zip(keys, np.exp(v))), n)[sup]
+        y = replay_circuit(rec, house, {**(overrides or {}), **dict(zip(keys, np.exp(v)))}, n)[sup]
         return float(np.mean((meas[:n][m] - y[m]) ** 2)) + float(np.sum((u - v) ** 2))
 
     J_file = J(np.log([file[q] for q in keys]))

@@ -17,7 +17,7 @@ import threading
 from concurrent.futures import ProcessPoolExecutor
 
 from ..errors import ConfigError
-from . import fit
+from . import fit, station_fit
 
 _JOB: dict = {}
 
@@ -50,13 +50,15 @@ def map_forked(fn, n: int, jobs: int | None = None) -> list:
 
 
 def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
-    """fit.fit_simulate for each effect; in up to `jobs` forked processes. A candidate whose
+    """fit.fit_simulate for each effect (station_fit.fit for one on the mixing station alone); in
+    up to `jobs` forked processes. A candidate whose
     values the replayed house refuses (a plume beyond half of a smaller tank) comes back unfitted
     with the house's reason; the others go on."""
     def one(i):
         e = effects[i]
         try:
-            return dataclasses.replace(fit.fit_simulate(e, ctx, rp, J0t, nominal), effect=None)
+            r = station_fit.fit(e, ctx, rp) if station_fit.applies(e, rp) else fit.fit_simulate(e, ctx, rp, J0t, nominal)
+            return dataclasses.replace(r, effect=None)
         except ConfigError as exc:
             return fit.Result(e.id, e.component, e.kind, False, f"the replayed house refuses its values: {exc}")
 

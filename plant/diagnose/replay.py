@@ -347,17 +347,17 @@ class Replayer:
             return skipped
         return {**emitter_mod.calibrate(self.rec, self.house_name, mask), "calibrated": True}
 
-    def calibrate_mixer(self, train: np.ndarray) -> dict | None:
+    def calibrate_mixer(self, train: np.ndarray, overrides: dict | None = None) -> dict | None:
         """Calibrate the mixing station replayed alone on the recorded supply after mixing over
-        the training samples at which the circuit flows (cut.calibrate_mixer). -> report entry
-        ({calibrated, values, ...}) or None without a mixing station alone."""
+        the training samples at which the circuit flows (cut.calibrate_mixer; a candidate's
+        `overrides` held). -> report entry ({calibrated, values, ...}) or None without one."""
         if not self.circuit:
             return None
         mask, skipped = self._circuit_training(train, self.heating.station_outputs[0], "mixing station alone",
                                                "the mixing station keeps the house file's actuator and gain")
         if skipped:
             return skipped
-        return {**cut_mod.calibrate_mixer(self.rec, self.house_name, mask), "calibrated": True}
+        return {**cut_mod.calibrate_mixer(self.rec, self.house_name, mask, overrides), "calibrated": True}
 
     def emitter_return(self, values: dict, elements: int | None, pipe: dict) -> np.ndarray:
         """The compared return of the emitter alone with `values` (its overrides) and `elements`
