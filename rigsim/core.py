@@ -19,7 +19,7 @@ from numba import njit
 from .heat import building_rates, dhw_draw, node_rates, radiators
 from .layout import *  # noqa: F401,F403  (rigsim.model addresses P, ledger and aux as core.I_*, core.L_*)
 from .layout import (
-    CP, F_BOI_TOFF, F_BOI_TON, F_CHP_TOFF, F_CHP_TON, F_M_B_PREV, F_M_C_PREV, F_SOC, F_TSET, I_B_KC, I_B_M,
+    CP, F_BOI_TOFF, F_BOI_TON, F_CHP_TOFF, F_CHP_TON, F_M_B_PREV, F_M_C_PREV, F_SOC, I_B_KC, I_B_M,
     I_C_BOI, I_C_CHP, I_C_RAD, I_C_RH, I_C_SEG, I_C_SH, I_D_KC, I_D_M, I_DT, I_K_RAD, I_N_RAD,
     I_T_COLD, I_TROOM, I_UA_SEG, L_BUILDING, L_DHW, L_E0, L_E1, L_EL, L_FUEL, L_GENLOSS, L_IDLE_MASS,
     L_IDLE_TIME, L_PIPELOSS, L_STORELOSS, L_TMAX, L_TMIN, LO_BOI, LO_CHP, LO_P0, LO_P1, LO_P2, LO_P3,
@@ -50,7 +50,6 @@ def _initial_fstate():
     fst[F_CHP_TOFF] = -1e9
     fst[F_BOI_TON] = -1e9
     fst[F_BOI_TOFF] = -1e9
-    fst[F_TSET] = 60.0
     return fst
 
 

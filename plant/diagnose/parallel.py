@@ -50,10 +50,9 @@ def map_forked(fn, n: int, jobs: int | None = None) -> list:
 
 
 def fit_all(effects: list, ctx, rp, J0t: float, nominal, jobs: int | None = None) -> list:
-    """fit.fit_simulate for each effect (station_fit.fit for one on the mixing station alone); in
-    up to `jobs` forked processes. A candidate whose
-    values the replayed house refuses (a plume beyond half of a smaller tank) comes back unfitted
-    with the house's reason; the others go on."""
+    """fit.fit_simulate for each effect (station_fit.fit for one on the mixing station alone), in
+    up to `jobs` forked processes. A candidate whose values the replayed house refuses (a plume
+    beyond half of a smaller tank) comes back unfitted with the house's reason; the others go on."""
     def one(i):
         e = effects[i]
         try:
