@@ -17,11 +17,16 @@ _HERE = Path(__file__).parent
 # against an older connection kernel (coupling_point.inlet) ran on after that kernel changed
 _KERNEL_SOURCES = ("*.py", "components/*.py", "connections/*.py", "controllers/*.py", "fmu/*.py",
                    "hydraulics/*.py", "truth/*.py")
+# the independent simulators' kernels compile into the same directory in a process that imported
+# plant (a suite's recording): rigsim's core.run inlines its units.py, and an edit of units.py
+# alone left the run-on of its PLC out of a cached core.run (only read here, never imported)
+_SIMULATOR_SOURCES = ("rigsim/*.py", "rigsim/*/*.py", "labsim/*.py")
 
 
 def _source_hash() -> str:
     h = hashlib.sha256()
     paths = [p for pattern in _KERNEL_SOURCES for p in _HERE.glob(pattern)]
+    paths += [p for pattern in _SIMULATOR_SOURCES for p in _HERE.parent.glob(pattern)]
     for path in sorted([*paths, _HERE.parent / "profiles" / "loaders.py"]):
         if path.exists():
             h.update(path.name.encode())
