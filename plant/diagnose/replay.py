@@ -211,10 +211,11 @@ class Replayer:
         return out
 
     def tank_heights(self) -> dict:
-        """Height [m] of every storage of the replayed plant, by instance name."""
+        """(height [m], layer count) of every storage of the replayed plant, by instance name."""
         from ..declaration import load
 
-        return {i.name: float(i.params.height) for i in load(self.plant_name).instances.values()
+        return {i.name: (float(i.params.height), int(getattr(i.params, "n_layers", 0)))
+                for i in load(self.plant_name).instances.values()
                 if i.kind == "storage" and hasattr(i.params, "height")}
 
     def _plant_room(self) -> PlantRoom:

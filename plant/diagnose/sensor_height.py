@@ -10,7 +10,12 @@ exactly where the columns file says reads that as a sensor offset on a rig that 
 So every replay moves each measured storage sensor's reading within its tolerance: the reading at
 z + s is the twin's reading at z plus s times the simulated vertical gradient there (from the
 simulated sensors next to it), s fitted by least squares on the training samples and held within
-+- (SLEEVE_TOL_M / H + GEOMETRY_TOL x z). The nominal twin and every candidate get the same
++- (SLEEVE_TOL_M / H + GEOMETRY_TOL x z). The top and bottom sensors have no sensor beyond them:
+moved toward the tank's end they read toward its end layer (storage.T_top / T_bot, at the end
+layer's centre), a piece of their own. That is where a sensor sits above the top port (rigsim
+realisation 3: 2 cm above it, 2 cm below it by the drawing): in still water that a hot inflow
+reaches at once and a cold one not at all, a reading that rises with the port and holds through a
+fall, which the gradient from below reads as a lag (the one-way "lag", docs/diagnose.md). The nominal twin and every candidate get the same
 freedom, so it cancels in their comparison; a sensor candidate on a storage sensor is fitted with
 its own shift again (fit.fit_signal), so a real offset is not taken by the shift (the shift's
 reading follows the gradient, an offset does not).
@@ -30,19 +35,33 @@ SENSOR = ".T_sensor_"
 
 
 @dataclass(frozen=True)
+class Piece:
+    g: np.ndarray       # the simulated vertical gradient over this piece [K per tank height]
+    lo: float           # the shifts it covers (relative, + up)
+    hi: float
+
+
+@dataclass(frozen=True)
 class HeightFit:
     shift: float        # the reading's move, in tank heights (relative, + up)
     tol: float          # the tolerance it was held within (relative)
-    g: np.ndarray       # the simulated vertical gradient at the sensor [K per tank height]
+    g: np.ndarray       # the gradient of the piece the shift lies on [K per tank height]
+    pieces: tuple = ()  # the reading's pieces (Piece): one, or two for a sensor at the tank's end
+
+    def __post_init__(self):
+        if not self.pieces:  # one piece: the gradient over the whole tolerance
+            object.__setattr__(self, "pieces", (Piece(self.g, -self.tol, self.tol),))
 
     def public(self, H: float) -> dict:
         return {"shift_m": round(self.shift * H, 4), "tolerance_m": round(self.tol * H, 4),
                 "at_bound": bool(abs(self.shift) >= self.tol * (1 - 1e-9) and self.tol > 0)}
 
 
-def gradients(rec, out: np.ndarray, cols: dict) -> dict:
-    """{measured storage sensor: (gradient per sample [K per tank height], relative height)} from
-    the replay rows `out` (the simulated sensors on either side; one side at the ends)."""
+def gradients(rec, out: np.ndarray, cols: dict, layers: dict | None = None) -> dict:
+    """{measured storage sensor: (gradient per sample [K per tank height], relative height,
+    gradient toward the tank's end layer or None, that layer's relative height)} from the replay
+    rows `out` (the simulated sensors on either side; one side at the ends, and the end layer
+    beyond it where `layers` gives the storage's layer count and the replay has the layer)."""
     grads = {}
     for s in cols:
         arr, sep, k = s.rpartition(SENSOR)
@@ -58,18 +77,51 @@ def gradients(rec, out: np.ndarray, cols: dict) -> dict:
         hi = k + 1 if (k + 1) in sims else k
         if lo == hi or z(hi) <= z(lo):
             continue
+        y = out[:, cols[s]]
         g = (out[:, cols[f"{arr}{SENSOR}{hi}"]] - out[:, cols[f"{arr}{SENSOR}{lo}"]]) / (z(hi) - z(lo))
-        grads[s] = (np.nan_to_num(g), z(k))
+        g_end, z_end = None, None
+        N = (layers or {}).get(arr)
+        end = f"{arr}.T_top" if hi == k else f"{arr}.T_bot" if lo == k else None
+        if N and end in cols:
+            z_end = 1 - 0.5 / N if hi == k else 0.5 / N
+            if (z_end - z(k)) * (1 if hi == k else -1) > 0:
+                g_end = np.nan_to_num((out[:, cols[end]] - y) / (z_end - z(k)))
+        grads[s] = (np.nan_to_num(g), z(k), g_end, z_end)
     return grads
 
 
-def best_shift(e: np.ndarray, g: np.ndarray, m: np.ndarray, tol: float) -> float:
-    """The shift within +-tol whose reading change s x g best removes the residual e on mask m."""
+def pieces_of(g, z, g_end, z_end, tol) -> tuple:
+    """The reading's pieces within +-tol: the gradient at the sensor over the whole tolerance, or,
+    with an end layer beyond it, the gradient from the inside toward the inside and the one to
+    the end layer up to it."""
+    if g_end is None:
+        return (Piece(g, -tol, tol),)
+    if z_end > z:
+        return Piece(g, -tol, 0.0), Piece(g_end, 0.0, min(tol, z_end - z))
+    return Piece(g_end, -min(tol, z - z_end), 0.0), Piece(g, 0.0, tol)
+
+
+def best_shift(e: np.ndarray, g: np.ndarray, m: np.ndarray, lo: float, hi: float) -> tuple[float, float]:
+    """The shift within [lo, hi] whose reading change s x g best removes the residual e on mask m
+    -> (shift, the squares it removes)."""
     m = m & np.isfinite(e)
     den = float(g[m] @ g[m])
     if den <= 0.0 or m.sum() < 10:
-        return 0.0
-    return float(np.clip(float(g[m] @ e[m]) / den, -tol, tol))
+        return 0.0, 0.0
+    ge = float(g[m] @ e[m])
+    s = float(np.clip(ge / den, lo, hi))
+    return s, 2 * s * ge - s * s * den
+
+
+def best_place(e: np.ndarray, m: np.ndarray, pieces) -> tuple[float, np.ndarray]:
+    """The shift over the pieces that best removes the residual e on mask m -> (shift, its
+    piece's gradient)."""
+    best = None
+    for p in pieces:
+        s, gain = best_shift(e, p.g[:len(e)], m[:len(e)], p.lo, p.hi)
+        if best is None or gain > best[0]:
+            best = (gain, s, p.g)
+    return best[1], best[2]
 
 
 def placed(meas, y, m, hf):
@@ -77,29 +129,31 @@ def placed(meas, y, m, hf):
     not a storage sensor, y as it is)."""
     if hf is None:
         return y
-    g = hf.g[:len(y)]
-    return y + best_shift(meas[:len(y)] - y, g, m[:len(y)], hf.tol) * g
+    s, g = best_place(meas[:len(y)] - y, m[:len(y)], hf.pieces)
+    return y + s * g[:len(y)]
 
 
-def apply(rec, out: np.ndarray, cols: dict, n: int, heights_m: dict, t_fit: float | None) -> dict:
+def apply(rec, out: np.ndarray, cols: dict, n: int, tanks: dict, t_fit: float | None) -> dict:
     """Move the measured storage sensors' columns of the replay rows `out` (first n samples)
     within their tolerance, each shift fitted on the samples up to t_fit (None: no shift).
-    heights_m: storage -> its height [m]. -> {signal: HeightFit}."""
+    tanks: storage -> (its height [m], its layer count). -> {signal: HeightFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
     if rec.valid is not None:
         fit &= rec.valid[:n]
     fits = {}
-    for s, (g, z) in gradients(rec, out[:n], cols).items():
-        H = heights_m.get(s.rpartition(SENSOR)[0])
+    layers = {k: N for k, (_, N) in tanks.items()}
+    for s, (g, z, g_end, z_end) in gradients(rec, out[:n], cols, layers).items():
+        H = tanks.get(s.rpartition(SENSOR)[0], (None, None))[0]
         if not H:
             continue
         tol = SLEEVE_TOL_M / H + GEOMETRY_TOL * z
+        pieces = pieces_of(g, z, g_end, z_end, tol)
         y = out[:n, cols[s]]
-        shift = best_shift(rec.data[s][:n] - y, g, fit & np.isfinite(y), tol)
-        out[:n, cols[s]] = y + shift * g
-        fits[s] = HeightFit(shift, tol, g)
+        shift, gs = best_place(rec.data[s][:n] - y, fit & np.isfinite(y), pieces)
+        out[:n, cols[s]] = y + shift * gs
+        fits[s] = HeightFit(shift, tol, gs, pieces)
     return fits
 
 
-__all__ = ["apply", "best_shift", "placed", "gradients", "HeightFit", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
+__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "HeightFit", "Piece", "SLEEVE_TOL_M", "GEOMETRY_TOL"]

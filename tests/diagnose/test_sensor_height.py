@@ -41,14 +41,14 @@ def test_a_sensor_a_few_cm_off_is_put_back_within_its_tolerance():
     data[sig[5]] = T(z[5] + true_shift) + rng.normal(0, 0.05, len(t))
     rec = _Rec(t, data, {sig[k]: z[k] for k in z})
     before = float(np.sqrt(np.mean((data[sig[5]] - out[:, 4]) ** 2)))
-    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": H}, t_fit=t[len(t) // 2])
+    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": (H, 40)}, t_fit=t[len(t) // 2])
     after = float(np.sqrt(np.mean((data[sig[5]] - out[:, 4]) ** 2)))
     assert fits[sig[5]].shift == pytest.approx(true_shift, rel=0.35)
     assert after < 0.5 * before
     # a sensor placed far off: the shift ends on its tolerance, not beyond
     data[sig[7]] = T(z[7] + 0.2) + rng.normal(0, 0.05, len(t))
     out2 = np.column_stack([T(z[k]) for k in z])
-    fits = sensor_height.apply(rec, out2, cols, len(t), {"storage": H}, t_fit=t[len(t) // 2])
+    fits = sensor_height.apply(rec, out2, cols, len(t), {"storage": (H, 40)}, t_fit=t[len(t) // 2])
     f7 = fits[sig[7]]
     assert abs(f7.shift) == pytest.approx(f7.tol)
     assert f7.tol == pytest.approx(sensor_height.SLEEVE_TOL_M / H + sensor_height.GEOMETRY_TOL * z[7])
@@ -70,3 +70,50 @@ def test_an_offset_fitted_with_the_shift_free_is_not_taken_by_it():
     assert np.sqrt(np.mean((meas - alone) ** 2)) > 1.0
     # and a sensor with no gradient information keeps its reading
     assert placed(meas, y, m, None) is y
+
+
+def _still_top(n=4000, seed=2):
+    """A top port whose water swings 55 ... 70 degC (charged and drawn), and the still water above
+    it: it takes a warmer inflow at once (buoyancy) and cools toward the port's water over hours."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * 60.0
+    port = 62.5 + 7.5 * np.sign(np.sin(2 * np.pi * t / 21600.0))
+    top = np.empty(n)
+    top[0] = port[0]
+    for i in range(1, n):
+        top[i] = max(port[i], top[i - 1] + (port[i] - top[i - 1]) * 60.0 / 7200.0)
+    return t, port, top, rng
+
+
+def test_a_top_sensor_above_its_port_reads_toward_the_still_water_above():
+    """rigsim realisation 3's top sensor sits 2 cm above the top port: it rises with the port's
+    water and holds through a fall. The twin's top layer above the port does the same, so the
+    top sensor moved up reads toward it (a piece of its own), where the gradient from the sensor
+    below, extended upward, reads the port's swings larger and never holds."""
+    t, port, top, rng = _still_top()
+    z9, z10, N, H = 0.85, 0.94, 40, 1.63
+    below = port - 3.0                                   # sensor 9, in the flushed water
+    cols = {"storage.T_sensor_9": 0, "storage.T_sensor_10": 1, "storage.T_top": 2}
+    out = np.column_stack([below, port, top])
+    z_top = 1 - 0.5 / N
+    true = 0.6 * (z_top - z10)                           # 60 % of the way up to the top layer
+    meas = port + 0.6 * (top - port) + rng.normal(0, 0.05, len(t))
+    rec = _Rec(t, {"storage.T_sensor_9": below, "storage.T_sensor_10": meas},
+               {"storage.T_sensor_9": z9, "storage.T_sensor_10": z10})
+    before = float(np.sqrt(np.mean((meas - port) ** 2)))
+    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": (H, N)}, t_fit=t[len(t) // 2])
+    f = fits["storage.T_sensor_10"]
+    assert f.shift == pytest.approx(true, rel=0.05)
+    assert len(f.pieces) == 2 and f.pieces[1].hi == pytest.approx(z_top - z10)
+    after = float(np.sqrt(np.mean((meas - out[:, 1]) ** 2)))
+    assert after < 0.1 * before
+    # the one-piece reading (no top layer replayed) moves by a constant here: it cannot hold
+    # through a fall
+    out1 = np.column_stack([below, port, top])
+    one = sensor_height.apply(rec, out1, {k: v for k, v in cols.items() if k != "storage.T_top"}, len(t),
+                              {"storage": (H, N)}, t_fit=t[len(t) // 2])
+    assert len(one["storage.T_sensor_10"].pieces) == 1
+    assert float(np.sqrt(np.mean((meas - out1[:, 1]) ** 2))) > 10 * after
+    # and the offset fitted with this place free finds the sensor's own 1 K on top of it
+    v = SensorOffset().solve(meas + 1.0 - port, np.ones(len(t), bool), f)
+    assert v == pytest.approx(1.0, abs=0.1)

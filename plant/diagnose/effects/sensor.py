@@ -113,12 +113,18 @@ class SensorOffset(Effect):
         m = m & np.isfinite(e)
         if shift is None:
             return float(np.mean(e[m]))
-        g = shift.g[:len(e)][m]
-        A = np.column_stack([np.ones(m.sum()), g])
-        (v, d), *_ = np.linalg.lstsq(A, e[m], rcond=None)
-        if abs(d) > shift.tol:
-            v = float(np.mean(e[m] - np.clip(d, -shift.tol, shift.tol) * g))
-        return float(v)
+        best = None
+        for piece in shift.pieces:  # the reading's pieces (a sensor at the tank's end has two)
+            g = piece.g[:len(e)][m]
+            A = np.column_stack([np.ones(m.sum()), g])
+            (v, d), *_ = np.linalg.lstsq(A, e[m], rcond=None)
+            if not piece.lo <= d <= piece.hi:
+                d = float(np.clip(d, piece.lo, piece.hi))
+                v = float(np.mean(e[m] - d * g))
+            sse = float(np.sum((e[m] - v - d * g) ** 2))
+            if best is None or sse < best[0]:
+                best = (sse, float(v))
+        return best[1]
 
     def stderr(self, e, n_eff):
         return float(np.std(e) / math.sqrt(n_eff))
