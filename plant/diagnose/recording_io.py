@@ -46,6 +46,7 @@ class Samples:
     columns: dict = field(default_factory=dict)  # signal -> user column name
     heights: dict = field(default_factory=dict)  # storage sensor signal -> relative height 0 ... 1
     ports: dict = field(default_factory=dict)    # storage -> {top, bottom}: relative port heights ([ports])
+    substituted: dict = field(default_factory=dict)  # command not recorded -> the output replayed for it
 
     def sensor_overrides(self) -> dict:
         """House overrides that put the twin's storage sensors where the recording's are."""

@@ -160,6 +160,13 @@ class ValveLeakage(UnitEffect):
         return {self.key("leak"): float(theta[0])}
 
     def plausible(self, ctx):
+        sub = getattr(ctx.rec, "substituted", {}).get(self.key("T_sup_set"))
+        if sub:
+            # the measured supply replayed as its own set-point: the valve's controller then opens
+            # it to that supply, so the replayed valve never closes whatever the lab's did
+            return False, (f"{self.key('T_sup_set')} is not recorded (replayed from the measured {sub}), so "
+                           "the replayed mixing valve never closes and a seat leak cannot show; map the "
+                           f"supply set-point the controller sent onto {self.key('T_sup_set')} to test one")
         if ctx.nominal is None:
             return True, ""
         rows = ctx.nominal.rows
