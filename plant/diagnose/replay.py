@@ -214,9 +214,8 @@ class Replayer:
         """(height [m], layer count) of every storage of the replayed plant, by instance name."""
         from ..declaration import load
 
-        return {i.name: (float(i.params.height), int(getattr(i.params, "n_layers", 0)))
-                for i in load(self.plant_name).instances.values()
-                if i.kind == "storage" and hasattr(i.params, "height")}
+        return {i.name: (float(i.params.height), int(i.params.n_layers))
+                for i in load(self.plant_name).instances.values() if i.kind == "storage"}
 
     def _plant_room(self) -> PlantRoom:
         """(what the stagnant pipes cool toward, where it comes from): read off the recording's
@@ -310,10 +309,10 @@ class Replayer:
                                       self.emitter_elements).items():
                 out[:, self.roles.catalogue.index(sig)] = v
         cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
-        t_fit = self.t_train if until is None else min(self.t_train or until, until)
-        t_fit = t_fit if self.t_train is not None else None
+        t_fit = None if self.t_train is None else self.t_train if until is None else min(self.t_train, until)
         pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes)
-        heights = sensor_height.apply(self.rec, out, cols, n, self.heights, t_fit)
+        tanks = {k: (H, int(ov.get(f"{k}.n_layers", N))) for k, (H, N) in self.heights.items()}  # a scheme's layers
+        heights = sensor_height.apply(self.rec, out, cols, n, tanks, t_fit)
         self._checked = True
         return Replay(out, pipe, heights)
 
