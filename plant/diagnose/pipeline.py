@@ -252,7 +252,7 @@ def build_report(b: Baseline, loc: Location, s: Selection, house: str) -> dict:
     rep["unit_modes"] = unit_modes.public(b.modes)
     rep["unrepresented_sensors"] = ctx.unrepresented
     # in the catalogue's order: the fit keeps them in a set's, which differs between runs
-    rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]][0])
+    rep["storage_sensor_places"] = {sig: h.public(rp.heights[sig.rpartition(".T_sensor_")[0]].height)
                                     for sig, h in sorted(b.nominal.heights.items(),
                                                          key=lambda kv: rp.roles.catalogue.index(kv[0]))}
     report_mod.flag_bounds(rep, list(s.results))

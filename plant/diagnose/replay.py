@@ -211,11 +211,11 @@ class Replayer:
         return out
 
     def tank_heights(self) -> dict:
-        """(height [m], layer count) of every storage of the replayed plant, by instance name."""
+        """Every storage of the replayed plant by name -> sensor_height.Tank (its ports where the
+        columns file's [ports] put them)."""
         from ..declaration import load
 
-        return {i.name: (float(i.params.height), int(i.params.n_layers))
-                for i in load(self.plant_name).instances.values() if i.kind == "storage"}
+        return sensor_height.tanks(load(self.plant_name), self.lab)
 
     def _plant_room(self) -> PlantRoom:
         """(what the stagnant pipes cool toward, where it comes from): read off the recording's
@@ -311,8 +311,8 @@ class Replayer:
         cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = None if self.t_train is None else self.t_train if until is None else min(self.t_train, until)
         pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes)
-        tanks = {k: (H, int(ov.get(f"{k}.n_layers", N))) for k, (H, N) in self.heights.items()}  # a scheme's layers
-        heights = sensor_height.apply(self.rec, out, cols, n, tanks, t_fit)
+        tanks = {k: t._replace(layers=int(ov.get(f"{k}.n_layers", t.layers))) for k, t in self.heights.items()}
+        heights = sensor_height.apply(self.rec, out, cols, n, tanks, t_fit)  # (a scheme's layers)
         self._checked = True
         return Replay(out, pipe, heights)
 

@@ -11,11 +11,15 @@ So every replay moves each measured storage sensor's reading within its toleranc
 z + s is the twin's reading at z plus s times the simulated vertical gradient there (from the
 simulated sensors next to it), s fitted by least squares on the training samples and held within
 +- (SLEEVE_TOL_M / H + GEOMETRY_TOL x z). The top and bottom sensors have no sensor beyond them:
-moved toward the tank's end they read toward its end layer (storage.T_top / T_bot, at the end
-layer's centre), a piece of their own. That is where a sensor sits above the top port (rigsim
-realisation 3: 2 cm above it, 2 cm below it by the drawing): in still water that a hot inflow
-reaches at once and a cold one not at all, a reading that rises with the port and holds through a
-fall, which the gradient from below reads as a lag (the one-way "lag", docs/diagnose.md). The nominal twin and every candidate get the same
+where one sits within its sleeve's tolerance of the port at its end (or beyond it), moved toward
+the tank's end it reads toward the end layer (storage.T_top / T_bot, at the end layer's centre),
+a piece of its own. That is where a sensor sits above the top port (rigsim realisation 3: 2 cm
+above it, 2 cm below it by the drawing): in still water that a hot inflow reaches at once and a
+cold one not at all, a reading that rises with the port and holds through a fall, which the
+gradient from below reads as a lag (the one-way "lag", docs/diagnose.md). Only the sleeve's
+tolerance counts there: a tank's diameter moves its ports with its sensors. A sensor further
+from its port cannot reach the still water (labsim's top sensor, 5 cm below its port: given the
+piece, the still water took part of a true 300 s lag on it, 47 % -> 28 % of its residual removed). The nominal twin and every candidate get the same
 freedom, so it cancels in their comparison; a sensor candidate on a storage sensor is fitted with
 its own shift again (fit.fit_signal), so a real offset is not taken by the shift (the shift's
 reading follows the gradient, an offset does not).
@@ -26,12 +30,36 @@ installation tolerance): SLEEVE_TOL_M = 3 cm per sleeve, GEOMETRY_TOL = 0.04 (a 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 SLEEVE_TOL_M = 0.03
 GEOMETRY_TOL = 0.04
 SENSOR = ".T_sensor_"
+
+
+class Tank(NamedTuple):
+    height: float       # [m]
+    layers: int         # the replayed scheme's layer count
+    top: float | None   # the top and bottom ports' relative heights (None: no port there known)
+    bottom: float | None
+
+
+def tanks(spec, lab: dict) -> dict:
+    """Every storage of the declaration `spec` by name -> Tank: its ports a coupling point's
+    (storage_top / storage_bottom [m], where the overrides `lab` put them)."""
+    out = {}
+    for i in spec.instances.values():
+        if i.kind != "storage":
+            continue
+        H = float(i.params.height)
+        pt = [j for j in spec.instances.values() if j.options.get("storage") == i.name and "storage_top" in j.options]
+        at = {e: lab.get(f"{pt[0].name}.storage_{e}", pt[0].options.get(f"storage_{e}")) if pt else None
+              for e in ("top", "bottom")}
+        out[i.name] = Tank(H, int(i.params.n_layers), *(None if at[e] is None else float(at[e]) / H
+                                                        for e in ("top", "bottom")))
+    return out
 
 
 @dataclass(frozen=True)
@@ -57,11 +85,12 @@ class HeightFit:
                 "at_bound": bool(abs(self.shift) >= self.tol * (1 - 1e-9) and self.tol > 0)}
 
 
-def gradients(rec, out: np.ndarray, cols: dict, layers: dict | None = None) -> dict:
+def gradients(rec, out: np.ndarray, cols: dict, tanks: dict | None = None) -> dict:
     """{measured storage sensor: (gradient per sample [K per tank height], relative height,
     gradient toward the tank's end layer or None, that layer's relative height)} from the replay
     rows `out` (the simulated sensors on either side; one side at the ends, and the end layer
-    beyond it where `layers` gives the storage's layer count and the replay has the layer)."""
+    beyond it where the sensor sits within its sleeve's tolerance of that end's port (tanks:
+    storage -> Tank) and the replay has the layer)."""
     grads = {}
     for s in cols:
         arr, sep, k = s.rpartition(SENSOR)
@@ -80,11 +109,13 @@ def gradients(rec, out: np.ndarray, cols: dict, layers: dict | None = None) -> d
         y = out[:, cols[s]]
         g = (out[:, cols[f"{arr}{SENSOR}{hi}"]] - out[:, cols[f"{arr}{SENSOR}{lo}"]]) / (z(hi) - z(lo))
         g_end, z_end = None, None
-        N = (layers or {}).get(arr)
+        tank = (tanks or {}).get(arr)
         end = f"{arr}.T_top" if hi == k else f"{arr}.T_bot" if lo == k else None
-        if N and end in cols:
-            z_end = 1 - 0.5 / N if hi == k else 0.5 / N
-            if (z_end - z(k)) * (1 if hi == k else -1) > 0:
+        port = None if tank is None else tank.top if hi == k else tank.bottom
+        up = 1 if hi == k else -1
+        if end in cols and port is not None and (port - z(k)) * up * tank.height <= SLEEVE_TOL_M:
+            z_end = 1 - 0.5 / tank.layers if hi == k else 0.5 / tank.layers
+            if (z_end - z(k)) * up > 0:
                 g_end = np.nan_to_num((out[:, cols[end]] - y) / (z_end - z(k)))
         grads[s] = (np.nan_to_num(g), z(k), g_end, z_end)
     return grads
@@ -136,17 +167,17 @@ def placed(meas, y, m, hf):
 def apply(rec, out: np.ndarray, cols: dict, n: int, tanks: dict, t_fit: float | None) -> dict:
     """Move the measured storage sensors' columns of the replay rows `out` (first n samples)
     within their tolerance, each shift fitted on the samples up to t_fit (None: no shift).
-    tanks: storage -> (its height [m], its layer count). -> {signal: HeightFit}."""
+    tanks: storage -> Tank. -> {signal: HeightFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
     if rec.valid is not None:
         fit &= rec.valid[:n]
     fits = {}
-    layers = {k: N for k, (_, N) in tanks.items()}
-    for s, (g, z, g_end, z_end) in gradients(rec, out[:n], cols, layers).items():
-        H = tanks.get(s.rpartition(SENSOR)[0], (None, None))[0]
-        if not H:
+    for s, (g, z, g_end, z_end) in gradients(rec, out[:n], cols, tanks).items():
+        tank = tanks.get(s.rpartition(SENSOR)[0])
+        if tank is None or not tank.height:
             continue
+        H = tank.height
         tol = SLEEVE_TOL_M / H + GEOMETRY_TOL * z
         pieces = pieces_of(g, z, g_end, z_end, tol)
         y = out[:n, cols[s]]
@@ -156,4 +187,4 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, tanks: dict, t_fit: float | 
     return fits
 
 
-__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "HeightFit", "Piece", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
+__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "HeightFit", "Piece", "Tank", "tanks", "SLEEVE_TOL_M", "GEOMETRY_TOL"]

@@ -7,7 +7,7 @@ import pytest
 from plant.diagnose import sensor_height
 from plant.diagnose.effects.sensor import SensorOffset
 from plant.diagnose.sensor_height import placed
-from plant.diagnose.sensor_height import HeightFit
+from plant.diagnose.sensor_height import HeightFit, Tank
 
 
 class _Rec:
@@ -41,14 +41,14 @@ def test_a_sensor_a_few_cm_off_is_put_back_within_its_tolerance():
     data[sig[5]] = T(z[5] + true_shift) + rng.normal(0, 0.05, len(t))
     rec = _Rec(t, data, {sig[k]: z[k] for k in z})
     before = float(np.sqrt(np.mean((data[sig[5]] - out[:, 4]) ** 2)))
-    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": (H, 40)}, t_fit=t[len(t) // 2])
+    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": Tank(H, 40, None, None)}, t_fit=t[len(t) // 2])
     after = float(np.sqrt(np.mean((data[sig[5]] - out[:, 4]) ** 2)))
     assert fits[sig[5]].shift == pytest.approx(true_shift, rel=0.35)
     assert after < 0.5 * before
     # a sensor placed far off: the shift ends on its tolerance, not beyond
     data[sig[7]] = T(z[7] + 0.2) + rng.normal(0, 0.05, len(t))
     out2 = np.column_stack([T(z[k]) for k in z])
-    fits = sensor_height.apply(rec, out2, cols, len(t), {"storage": (H, 40)}, t_fit=t[len(t) // 2])
+    fits = sensor_height.apply(rec, out2, cols, len(t), {"storage": Tank(H, 40, None, None)}, t_fit=t[len(t) // 2])
     f7 = fits[sig[7]]
     assert abs(f7.shift) == pytest.approx(f7.tol)
     assert f7.tol == pytest.approx(sensor_height.SLEEVE_TOL_M / H + sensor_height.GEOMETRY_TOL * z[7])
@@ -101,7 +101,8 @@ def test_a_top_sensor_above_its_port_reads_toward_the_still_water_above():
     rec = _Rec(t, {"storage.T_sensor_9": below, "storage.T_sensor_10": meas},
                {"storage.T_sensor_9": z9, "storage.T_sensor_10": z10})
     before = float(np.sqrt(np.mean((meas - port) ** 2)))
-    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": (H, N)}, t_fit=t[len(t) // 2])
+    tank = Tank(H, N, 0.95, None)                        # its port 1.6 cm above it, within the sleeve's 3 cm
+    fits = sensor_height.apply(rec, out, cols, len(t), {"storage": tank}, t_fit=t[len(t) // 2])
     f = fits["storage.T_sensor_10"]
     assert f.shift == pytest.approx(true, rel=0.05)
     assert len(f.pieces) == 2 and f.pieces[1].hi == pytest.approx(z_top - z10)
@@ -111,8 +112,12 @@ def test_a_top_sensor_above_its_port_reads_toward_the_still_water_above():
     # through a fall
     out1 = np.column_stack([below, port, top])
     one = sensor_height.apply(rec, out1, {k: v for k, v in cols.items() if k != "storage.T_top"}, len(t),
-                              {"storage": (H, N)}, t_fit=t[len(t) // 2])
+                              {"storage": tank}, t_fit=t[len(t) // 2])
     assert len(one["storage.T_sensor_10"].pieces) == 1
+    # nor has a sensor further below its port than its sleeve's tolerance (labsim's, 5 cm)
+    far = sensor_height.apply(rec, np.column_stack([below, port, top]), cols, len(t),
+                              {"storage": Tank(H, N, z10 + 0.05 / H, None)}, t_fit=t[len(t) // 2])
+    assert len(far["storage.T_sensor_10"].pieces) == 1
     assert float(np.sqrt(np.mean((meas - out1[:, 1]) ** 2))) > 10 * after
     # and the offset fitted with this place free finds the sensor's own 1 K on top of it
     v = SensorOffset().solve(meas + 1.0 - port, np.ones(len(t), bool), f)
