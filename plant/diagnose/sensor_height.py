@@ -19,10 +19,11 @@ cold one not at all, a reading that rises with the port and holds through a fall
 gradient from below reads as a lag (the one-way "lag", docs/diagnose.md). Only the sleeve's
 tolerance counts there: a tank's diameter moves its ports with its sensors. A sensor further
 from its port cannot reach the still water (labsim's top sensor, 5 cm below its port: given the
-piece, the still water took part of a true 300 s lag on it, 47 % -> 28 % of its residual removed). The nominal twin and every candidate get the same
-freedom, so it cancels in their comparison; a sensor candidate on a storage sensor is fitted with
-its own shift again (fit.fit_signal), so a real offset is not taken by the shift (the shift's
-reading follows the gradient, an offset does not).
+piece, the still water took part of a true 300 s lag on it, 47 % -> 28 % of its residual
+removed). The nominal twin and every candidate get the same freedom, so it cancels in their
+comparison; a sensor candidate on a storage sensor is fitted with its own shift again
+(fit.fit_signal), so a real offset is not taken by the shift (the shift's reading follows the
+gradient, an offset does not).
 
 Tolerances (not tuned on a suite; the rig description's, docs/lab/house1-rig.md §5, a lab's usual
 installation tolerance): SLEEVE_TOL_M = 3 cm per sleeve, GEOMETRY_TOL = 0.04 (a +-2 % diameter).
@@ -187,4 +188,5 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, tanks: dict, t_fit: float | 
     return fits
 
 
-__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "HeightFit", "Piece", "Tank", "tanks", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
+__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "tanks", "HeightFit", "Piece",
+           "Tank", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
