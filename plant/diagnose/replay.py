@@ -194,8 +194,7 @@ class Replayer:
         spec = load(self.plant_name)
         out = {}
         for name, rel in ports.items():
-            points = [i for i in spec.instances.values()
-                      if i.options.get("storage") == name and "storage_top" in i.options]
+            points = sensor_height.points_of(spec, name)
             if not points or name not in spec.instances:
                 raise ConfigError(f"[ports] {name}: {self.plant_label} has no coupling point whose storage is "
                                   f"{name!r}; ports can be declared for "

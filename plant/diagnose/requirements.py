@@ -101,8 +101,7 @@ def check(rec, house="house1") -> list[str]:
             if sub in run:  # a run command for a modulation: 1 while on
                 v = np.where(v > run[sub], 1.0, 0.0)
             rec.data[c] = v
-            if hasattr(rec, "substituted"):
-                rec.substituted[c] = sub
+            rec.substituted[c] = sub
             warnings.append(f"{c}: not recorded; replayed from {sub}" + (" (modulation 1 while on)" if sub in run else ""))
         else:
             missing.append(c)

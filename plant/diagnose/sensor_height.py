@@ -47,6 +47,11 @@ class Tank(NamedTuple):
     bottom: float | None
 
 
+def points_of(spec, storage: str) -> list:
+    """The coupling points of the declaration `spec` that feed `storage` at their ports."""
+    return [j for j in spec.instances.values() if j.options.get("storage") == storage and "storage_top" in j.options]
+
+
 def tanks(spec, lab: dict) -> dict:
     """Every storage of the declaration `spec` by name -> Tank: its ports a coupling point's
     (storage_top / storage_bottom [m], where the overrides `lab` put them)."""
@@ -55,7 +60,7 @@ def tanks(spec, lab: dict) -> dict:
         if i.kind != "storage":
             continue
         H = float(i.params.height)
-        pt = [j for j in spec.instances.values() if j.options.get("storage") == i.name and "storage_top" in j.options]
+        pt = points_of(spec, i.name)
         at = {e: lab.get(f"{pt[0].name}.storage_{e}", pt[0].options.get(f"storage_{e}")) if pt else None
               for e in ("top", "bottom")}
         out[i.name] = Tank(H, int(i.params.n_layers), *(None if at[e] is None else float(at[e]) / H
@@ -188,5 +193,5 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, tanks: dict, t_fit: float | 
     return fits
 
 
-__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "tanks", "HeightFit", "Piece",
-           "Tank", "SLEEVE_TOL_M", "GEOMETRY_TOL"]
+__all__ = ["apply", "best_shift", "best_place", "placed", "gradients", "pieces_of", "points_of", "tanks",
+           "HeightFit", "Piece", "Tank", "SLEEVE_TOL_M", "GEOMETRY_TOL"]

@@ -160,7 +160,7 @@ class ValveLeakage(UnitEffect):
         return {self.key("leak"): float(theta[0])}
 
     def plausible(self, ctx):
-        sub = getattr(ctx.rec, "substituted", {}).get(self.key("T_sup_set"))
+        sub = ctx.rec.substituted.get(self.key("T_sup_set"))
         if sub:
             # the measured supply replayed as its own set-point: the valve's controller then opens
             # it to that supply, so the replayed valve never closes whatever the lab's did
