@@ -165,7 +165,8 @@ class Kind:
     instances it names have a role of its range), then calls `check(inst, problems)` for what
     spans several links or lies inside a table. A kind that carries water between others
     implements the protocol its role needs:
-      generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals
+      generator  emit_generator(c, inst, T_in, m_ext) -> (m_flow, T_out) locals; pump_stood(c, inst)
+                 -> an expression true while its own pump stood (a coupling point's idle flow)
       consumer   emit_consumer(c, inst, T_sup) -> (m_flow, T_return expression for `volumes`)
       emitter    emit_emitter(c, inst, m_flow, T_sup) -> T_return local
     """

@@ -251,8 +251,13 @@ class Kind(Generator):
     def initial_state(self, inst):
         return initial_state(inst.params)
 
+    def pump_stood(self, c, inst) -> str:
+        # not running: standing, or in the run-on, whose flow the state does not keep
+        x, _ = c.views(inst)
+        return f"{x}[{X.running}] < 0.5"
+
     def emit_generator(self, c, inst, T_in, m_ext):
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        x, p = c.views(inst)
         out = Outlet.new(c)
         data = inst.options.get("data", "wolf_cgb14")  # one of DATA_SETS (the declaration checked it)
         tabs = ", ".join(c.table(a) for a in tables("standard" if data == "wolf_cgb14" else data))

@@ -332,6 +332,11 @@ class Kind(Generator):
                f"{c.s(inst.name + '.y_set')}, 0.0, {T_in})[0]")
         return m
 
+    def pump_stood(self, c, inst) -> str:
+        # the internal pump's flow of the step before: it runs on through the cool-down
+        x, _ = c.views(inst)
+        return f"{x}[{X.m_pump}] <= 0.0"
+
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         x, p = c.views(inst)
         out = Outlet.new(c)

@@ -257,6 +257,10 @@ class _HeatPump(Generator):
     def initial_state(self, inst):
         return initial_state(inst.params)
 
+    def pump_stood(self, c, inst) -> str:
+        x, _ = c.views(inst)
+        return f"{x}[{X.running}] < 0.5"
+
     def _emit_shared(self, c, inst, x, out, T_in, y, fuel):
         cop = f"{out.P_heat} / -{out.P_el} if {out.mode} == {STEADY!r} and {out.P_el} < 0.0 else 0.0"
         self.emit_outputs(c, inst, x, X, out, T_in, y=y, fuel=fuel,
@@ -271,7 +275,7 @@ class AirKind(_HeatPump):
     Params = ParamsAir
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        x, p = c.views(inst)
         out = Outlet.new(c, fuel=False)
         tabs = ", ".join(c.table(a) for a in tables_air())
         on = c.signal(inst, "on", "1", "input", "heat pump run command (0/1)")
@@ -300,7 +304,7 @@ class BrineKind(_HeatPump):
                                range=("source",))}
 
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
-        x, p = c.state(inst, self.initial_state(inst)), c.param(inst, pack(inst.params))
+        x, p = c.views(inst)
         coll = c.instances[inst.options["collector"]]
         coll_kind = c.kinds[coll.kind]
         T_src = coll_kind.source_temperature(c, coll)

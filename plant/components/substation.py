@@ -172,6 +172,9 @@ class Kind(ComponentKind):
             c.values[key] = slots
         return c.values[key]
 
+    def pump_stood(self, c, inst) -> str:
+        return f"{self._slots(c, inst)['m_set']} <= 0.0"
+
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         k = self._slots(c, inst)
         m, T, mg, Tg, eps = (c.var(v) for v in ("m_dh", "T_dh", "m_grid", "T_grid", "eps"))

@@ -11,6 +11,7 @@ start-of-step outflow temperatures, so the ledger closes to round-off.
 Effects the ideal switch leaves out, declared per generator (0 = the original's behaviour):
   idle_flow = { chp = 0.3 }       share of the consumers' flow deficit left by the generators
                                   listed before it that returns through its branch (no check valve)
+                                  while its own pump stands
   pump_coupling = { chp = 0.1 }   share of the flow of the generators listed before it pushed
                                   through its branch (suction on a shared header)
   storage_inlet_mixing = 0.05     m3 beyond the port layer over which a storage inflow spreads
@@ -175,8 +176,9 @@ class Kind(ComponentKind):
                 j = 3 + 2 * forced.index(g.name)
                 before = " + ".join(m for m, _ in flows) or "0.0"
                 m_ext = c.var("m_ext")
+                stood = c.kinds[g.kind].pump_stood(c, g)
                 c.emit("hydraulics", f"{m_ext} = {hyd}.forced_generator_flows({m_dem}, {before}, "
-                                     f"{p}[{j}], {p}[{j + 1}])")
+                                     f"{p}[{j}], {p}[{j + 1}], {stood})")
             flows.append(c.kinds[g.kind].emit_generator(c, g, T_rh, m_ext))
         return flows
 

@@ -53,6 +53,10 @@ class GeneratorKind(ComponentKind):
     name = "measured_generator"
     role = "generator"
 
+    def pump_stood(self, c, inst) -> str:
+        # its measured flow holds whatever the network pushed through it
+        return "False"
+
     def emit_generator(self, c, inst, T_in, m_ext, m_pump=None):
         m_in = c.signal(inst, "m_flow", "kg/s", "input", "measured generator flow")
         T_in_meas = c.signal(inst, "T_sup", "degC", "input", "measured generator outlet temperature")

@@ -18,7 +18,7 @@ class IdleGeneratorFlow(Effect):
 
     Two symptoms of the one cause, fitted jointly: when the consumers draw more than the boiler
     delivers, a share of that deficit returns through the CHP branch instead of the storage
-    (switch.idle_flow.chp; an idle CHP is flushed, a running one pushed past its own pump);
+    (switch.idle_flow.chp; it flushes a CHP whose own pump stands, a running pump sets its branch's flow);
     and the boiler pump may push part of its own flow through the CHP on a shared header
     (switch.pump_coupling.chp). The second is fitted only when the recording has
     CHP-and-boiler periods, so the first cannot imitate it.
