@@ -58,7 +58,9 @@ def _plume_litres(rep):
 # the extra lag
 SIZES = {
     "heat_loss": (lambda r: r["parameters"]["UA_loss"]["value"], lambda m: m["sizes"]["storage_UA_W_per_K"]),
-    "idle_generator_flow": (lambda r: r["size"]["flow_kg_s"], lambda m: m["effect_size"]["idle_chp_flow_mean_kg_s"]),
+    "idle_generator_flow": (lambda r: r["size"]["flow_kg_s"],
+                            lambda m: m["effect_size"].get("idle_chp_flow_heating_mean_kg_s",
+                                                           m["effect_size"]["idle_chp_flow_mean_kg_s"])),
     "storage_mixing": (_plume_litres, lambda m: m["sizes"].get("plume_litres_applied", m["sizes"]["plume_litres"])),
     "sensor_lag": (lambda r: r["parameters"]["tau"]["value"], lambda m: m["sizes"]["tau_s"]),
     "sensor_offset": (lambda r: r["parameters"]["offset"]["value"], lambda m: m["sizes"]["offset_K"]),

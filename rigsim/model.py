@@ -331,6 +331,13 @@ def simulate(nuisance: dict, effects: Effects, start: str = "2021-01-10", days: 
                                                if idle_time > 0 else 0.0)
         eff_size["idle_chp_flow_week_mean_kg_s"] = led[core.L_IDLE_MASS] / (days * 86400.0)
         eff_size["chp_standing_share"] = idle_time / (days * 86400.0)
+        # over the samples where the standing CHP is the deficit's only other path: the boiler
+        # gives no flow and the heating circuit takes some from the header (the figure a
+        # diagnosis reports, as labsim's recordings define it)
+        prim = aux[:, core.A_U_VALVE] * rec[:, core.C_HC_FLOW] / 60.0
+        sel = (aux[:, core.A_CHP_STATE] == 0) & (rec[:, core.C_CB_FLOW] <= 0.0) & (prim > 0.02)
+        if sel.any():
+            eff_size["idle_chp_flow_heating_mean_kg_s"] = float(aux[sel, core.A_M_CHP].mean())
     final = dict(Tb=Tb, Td=Td, Tc=Tc, Tr=Tr, nodes=nodes, T_room_plant=T_room,
                  T_cold=T_COLD, T_chp_max=T_CHP_MAX,
                  tank_T_min=led[core.L_TMIN], tank_T_max=led[core.L_TMAX])

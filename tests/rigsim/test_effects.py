@@ -49,6 +49,9 @@ def test_idle_flow_only_through_a_standing_chp():
     st = r.aux[:, 1] == 0
     assert st.any() and r.aux[st, 0].max() > 0.0
     assert r.effect_size["idle_chp_flow_mean_kg_s"] > 0.0
+    # while the heating circuit draws and the boiler stands, the deficit flows: more than over all
+    # of the standing time, which holds hours without a deficit
+    assert r.effect_size["idle_chp_flow_heating_mean_kg_s"] > r.effect_size["idle_chp_flow_mean_kg_s"]
     assert r.closure < 1e-6
 
 
