@@ -62,6 +62,25 @@ def test_forced_chp_flow_is_seen_by_the_branch_not_by_the_units_counter():
     assert meter < heat  # the unit's counter misses the heat of the flow its pump did not move
 
 
+def test_the_idle_share_passes_a_standing_chp_only_and_pump_coupling_a_running_one():
+    """A running pump's head sets its branch's flow: the consumers' deficit flushes the CHP only
+    while its pump stands; the boiler's suction (pump_coupling) reaches a running one too."""
+    col = {n: CATALOGUE.index(n) for n in ("chp.m_flow", "chp.m_flow_pump", "boiler.m_flow")}
+    for ov in ({"switch.idle_flow.chp": 0.8}, {"switch.pump_coupling.chp": 0.8}):
+        h = load_house("house1", start="2021-01-10", overrides=ov)
+        _, rows = h.run(DAY, dt=1.0, out_interval=60.0)
+        assert h.ledger()["closure"] < 1e-9
+        m, own = rows[:, col["chp.m_flow"]], rows[:, col["chp.m_flow_pump"]]
+        running = own > 0.0
+        assert running.mean() > 0.1 and (~running).mean() > 0.05
+        assert (m[~running] > 0.0).any()  # flushed while standing
+        pushed = running & (m > own + 1e-12)
+        if "switch.idle_flow.chp" in ov:
+            assert not pushed.any()  # the pump's own flow while it runs
+        else:
+            assert pushed.any() and (rows[pushed, col["boiler.m_flow"]] > 0.0).all()
+
+
 def test_bad_inlet_mixing_names_the_key_and_the_range():
     with pytest.raises(ConfigError) as e:
         load_house("house1", overrides={"switch.storage_inlet_mixing": 0.6})
