@@ -63,19 +63,3 @@ def test_the_same_inputs_give_the_fit_made_before_and_a_changed_sample_a_new_one
     ps._fit(t, m, use, 20.0, [(changed, meas)])
     ps._fit(t, m, use, 21.0, [(fluid, meas)])
     assert len(made) == 3
-
-
-def test_a_reading_given_keeps_the_fit_within_it():
-    # a short standstill after which the measured pipe holds the twin's fluid: unconstrained, the
-    # replay's own value fits; told that the sensor cools (the nominal replay's finding), the fit
-    # is a cooling time constant within its range, and a holding sensor's an infinite one
-    t = np.arange(200) * 60.0
-    m = np.where((t > 3000) & (t < 3900), 0.0, 0.05)
-    fluid = np.where(m > 0, 60.0, 45.0)
-    meas = fluid.copy()
-    use = m <= ps.FLOWING
-    free = ps._fit(t, m, use, 20.0, [(fluid, meas)])
-    assert ps.reading_of(free.tau) == "as simulated"
-    cools = ps._fit(t, m, use, 20.0, [(fluid, meas)], "cools")
-    assert ps.reading_of(cools.tau) == "cools" and ps.TAU_RANGE[0] <= cools.tau <= ps.TAU_RANGE[1]
-    assert math.isinf(ps._fit(t, m, use, 20.0, [(fluid, meas)], "holds").tau)
