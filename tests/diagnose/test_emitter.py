@@ -1,6 +1,7 @@
 """The heating circuit found by role and its emitter replayed alone (plant/diagnose/emitter.py):
 any house's station, coupling point, emitter and zone from the links; a floor replayed by its
 kind's kernel, energy kept; its rating calibrated back from a recorded return."""
+from pathlib import Path
 import numpy as np
 
 from plant.diagnose import emitter
@@ -20,7 +21,7 @@ def test_every_shipped_house_has_its_circuit_found_by_role():
 
 def test_a_house_file_with_other_names_has_its_circuit_found(tmp_path):
     # house 2 with its station, coupling point, floor and zone renamed: found by the links alone
-    text = open("plant/houses/house2.toml").read()
+    text = (Path(__file__).resolve().parents[2] / "plant" / "houses" / "house2.toml").read_text()
     for old, new in (("mixer", "hk_mix"), ("[floor]", "[estrich]"), ('emitter = "floor"', 'emitter = "estrich"'),
                      ("[heating]", "[hk_weiche]"), ("heating.", "hk_weiche."), ('"zone.', '"raum.'),
                      ('zone = "zone"', 'zone = "raum"'), ("[zone]", "[raum]")):
