@@ -30,7 +30,16 @@ infinity (the reading holds), M over MASS_GRID, each then refined between its gr
 separately for every replay (the nominal twin and each candidate alike, so they cancel in their
 comparison); or the replay's own stagnant fluid (AS_SIMULATED: the twin's own recordings). A value
 on a bound of the range is reported. A replay that fits nothing (no training window given) keeps its
-own value.
+own value. "As simulated" is the twin's own recordings: a candidate's replay may read so only where
+the calibrated nominal replay does (`readings`); elsewhere it holds or cools. A candidate that makes
+the branch flow leaves it fewer and shorter standstills in training, on which the replay's own
+fluid could fit best by chance and then hold a stopped CHP at 80 degC through the held-out days'
+two-hour standstills, where the lab's pipe cooled to 36 degC (rigsim realisation 1's
+idle_flow_small at the true idle share: 32 standing training samples, the longest 16 min, against
+the nominal replay's 93 and 79 min; the CHP outlet's held-out RMSE 5.7 -> 11 K). Kept to the
+nominal's reading altogether, a twin-made truth broke: its idle flush, which the nominal replay
+lacks, made the nominal's stopped CHP read a cooling, while the candidate that flushes it reads
+the twin's held fluid (the concealed idle flow; a hold fits it as well).
 
 The temperature the pipes cool toward (the air around them, not the storage's T_env) is read off
 the recording, not fitted in each replay: the lowest of the branches' median readings after
@@ -242,11 +251,13 @@ def _grid_squares(t, fluid, meas, m, masses, decays, T_room, idx, out):
 
 
 def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None,
-          pipes: dict) -> dict:
+          pipes: dict, readings: dict | None = None) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
     modelled reading (cooling toward T_room); tau and mass per branch fitted on the samples up to
-    t_fit at which the branch does not run (None: no fit, the replay's own value). cols: catalogue
-    name -> column of the signals the replay computes. -> {flow signal: PipeFit}."""
+    t_fit at which the branch does not run (None: no fit, the replay's own value), as simulated
+    only where `readings` ({flow signal: the nominal replay's public()["reading"]}) says so or
+    is silent. cols: catalogue name -> column of the signals the replay computes.
+    -> {flow signal: PipeFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
     fits, unseen = {}, {}
@@ -260,7 +271,8 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
         use = fit & (m <= FLOWING)
         pf = AS_SIMULATED_FIT
         if use.sum() >= 10 and any(v is not None for v in meas.values()):
-            pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None])
+            pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None],
+                      (readings or {}).get(flow, "as simulated") == "as simulated")
         elif t_fit is not None and any(v is not None for v in meas.values()):
             unseen[flow] = (m, fluid)
         for s in sensors:
@@ -279,25 +291,25 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
     return fits
 
 
-def _fit(t, m, use, T_room, pairs) -> PipeFit:
+def _fit(t, m, use, T_room, pairs, as_simulated: bool = True) -> PipeFit:
     """The (tau, mass) grid's best, refined around it on log scales when finite (a continuous fit:
     a grid step would make every replay's cost jump with it): tau alone by Brent within its grid
     neighbours where the pipe only runs or stands, else both together (Nelder-Mead, within the
     ranges: the two trade off, and one at a time stops short). The same inputs give the fit kept
-    from before (_FITS)."""
+    from before (_FITS). as_simulated: whether the replay's own fluid is among the readings."""
     # the reading is causal: the samples after the last one scored change no cost. The cost is
     # asked for a few hundred times per replay, so its arrays are prepared once
     end = int(np.flatnonzero(use)[-1]) + 1
     tf, mf, used = np.asarray(t[:end], float), np.nan_to_num(np.asarray(m[:end], float)), use[:end]
     prepared = [(np.asarray(y[:end], float), np.asarray(y_m[:end], float)) for y, y_m in pairs]
-    key = hashlib.blake2b(repr(float(T_room)).encode())
+    key = hashlib.blake2b(repr((float(T_room), as_simulated)).encode())
     for a in (tf, mf, used, *(a for pair in prepared for a in pair)):
         key.update(np.ascontiguousarray(a).view(np.uint8))
     key = key.digest()
     if key not in _FITS:
         if len(_FITS) >= FITS_KEPT:
             del _FITS[next(iter(_FITS))]
-        _FITS[key] = _fit_new(tf, mf, used, T_room, prepared)
+        _FITS[key] = _fit_new(tf, mf, used, T_room, prepared, as_simulated)
     return _FITS[key]
 
 
@@ -308,7 +320,7 @@ FITS_KEPT = 256
 _FITS: dict = {}
 
 
-def _fit_new(tf, mf, used, T_room, prepared) -> PipeFit:
+def _fit_new(tf, mf, used, T_room, prepared, as_simulated=True) -> PipeFit:
     """_fit's search on its prepared arrays (cut at the last scored sample)."""
     idx = np.flatnonzero(used)
     scratch = np.empty(idx.size)
@@ -332,6 +344,8 @@ def _fit_new(tf, mf, used, T_room, prepared) -> PipeFit:
     squares = np.empty((GRID_DECAYS.size, masses.size, idx.size))
     for y, y_m in prepared:
         costs[1:] += _grid_squares(tf, y, y_m, mf, masses, GRID_DECAYS, float(T_room), idx, squares).sum(axis=2)
+    if not as_simulated:
+        costs[0] = np.inf
     k, j = np.unravel_index(int(np.argmin(costs)), costs.shape)
     tau, mass = float(TAU_GRID[k]), float(masses[j])
     if tau == AS_SIMULATED:
@@ -355,11 +369,16 @@ def _refine(cost, grid, k, x, best) -> float:
     return float(math.exp(res.x)) if res.fun < best else x
 
 
+def reading_of(tau: float) -> str:
+    """What a sensor with this cooling time constant reads while its branch stands."""
+    return "cools" if 0 < tau < math.inf else "holds" if tau else "as simulated"
+
+
 def public(fit: PipeFit) -> dict:
     """report.json's entry of a branch's fit."""
     cools = 0 < fit.tau < math.inf
     return {"tau_s": fit.tau if cools else None,
-            "reading": "cools" if cools else "holds" if fit.tau else "as simulated",
+            "reading": reading_of(fit.tau),
             "pipe_water_kg": fit.mass if fit.fitted else None, "at_bound": at_bound(fit),
             "tau_from": "the other branches (this one never stood in training)" if fit.borrowed else "fitted"}
 

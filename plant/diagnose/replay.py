@@ -30,9 +30,8 @@ from .requirements import BOUNDARY, profile_differs
 
 @dataclass(frozen=True)
 class Replay:
-    """One run of the replayed twin: rows [n_samples, n_signals] in house 1's catalogue order, and
-    the reading models fitted to it: the pipe sensors' (flow signal -> pipe_sensor fit) and the
-    storage sensors' places (sensor -> sensor_height.HeightFit)."""
+    """One run of the replayed twin: rows [n_samples, n_signals] in catalogue order, the pipe sensors'
+    fits (flow signal -> pipe_sensor fit) and the storage sensors' places (-> sensor_height.HeightFit)."""
     rows: np.ndarray
     pipe: dict = field(default_factory=dict)
     heights: dict = field(default_factory=dict)
@@ -133,14 +132,15 @@ class Replayer:
         # nominal point; the re-fit's descents return to earlier values)
         self._drives = Drives()
         self._subsystems: dict = {}  # the same for the subsystems replayed alone (_alone)
-        # calibrated values (with_calibration): applied to every run; a run's own overrides take
-        # precedence over them
+        # calibrated values (with_calibration): applied to every run, a run's own overrides over them
         self.base: dict = {}
         # where the lab's storage sensors and ports are (columns file): every run starts from them
         self.lab = {**(rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}), **self._lab_ports()}
-        # the end of the training window: the pipe sensors' cooling time models and the storage
-        # sensors' places are fitted up to it (pipe_sensor.py, sensor_height.py)
+        # the end of the training window: the pipe sensors' cooling and the storage sensors' places
+        # are fitted up to it (pipe_sensor.py, sensor_height.py); the pipe sensors read as
+        # simulated only where the nominal replay's do (pipe_sensor.apply's readings)
         self.t_train: float | None = None
+        self.readings: dict = {}
         # the emitter alone's element count (until calibrated emitter.OWN, its kind's kernel) and
         # the instances calibrated on their own subsystem: the nominal re-fit leaves those alone
         self.emitter_elements = emitter_mod.OWN
@@ -150,11 +150,12 @@ class Replayer:
         self.heights = self.tank_heights()
 
     def with_calibration(self, base: dict | None = None, calibrated=(), emitter_elements: int | None = None,
-                         t_train: float | None = None) -> "Replayer":
+                         t_train: float | None = None, readings: dict | None = None) -> "Replayer":
         """A replayer like this one whose runs start from `base` on top of this one's, with the
         instances `calibrated` alone added (and the emitter's element count, the end of the
-        training window, where given)."""
+        training window, the pipe sensors' readings, where given)."""
         out = copy.copy(self)
+        out.readings = {**self.readings, **(readings or {})}
         out.base = {**self.base, **(base or {})}
         out.calibrated = self.calibrated | frozenset(calibrated)
         if emitter_elements is not None:
@@ -309,7 +310,7 @@ class Replayer:
                 out[:, self.roles.catalogue.index(sig)] = v
         cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = None if self.t_train is None else self.t_train if until is None else min(self.t_train, until)
-        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes)
+        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes, self.readings)
         tanks = {k: t._replace(layers=int(ov.get(f"{k}.n_layers", t.layers))) for k, t in self.heights.items()}
         heights = sensor_height.apply(self.rec, out, cols, n, tanks, t_fit)  # (a scheme's layers)
         self._checked = True

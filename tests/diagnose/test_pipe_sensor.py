@@ -63,3 +63,19 @@ def test_the_same_inputs_give_the_fit_made_before_and_a_changed_sample_a_new_one
     ps._fit(t, m, use, 20.0, [(changed, meas)])
     ps._fit(t, m, use, 21.0, [(fluid, meas)])
     assert len(made) == 3
+
+
+def test_the_twins_own_fluid_is_a_reading_only_where_the_nominal_replay_reads_it():
+    # a short standstill after which the measured pipe holds the twin's fluid while the fluid
+    # itself drifts: free, the replay's own value fits exactly; where the nominal replay's pipe is
+    # not the twin's own, the fit is a hold or a cooling, and no longer exact
+    t = np.arange(200) * 60.0
+    m = np.where((t > 3000) & (t < 3900), 0.0, 0.05)
+    fluid = np.where(m > 0, 60.0, 45.0 + (t - 3000) / 300.0)
+    meas = fluid.copy()
+    use = m <= ps.FLOWING
+    free = ps._fit(t, m, use, 20.0, [(fluid, meas)])
+    assert ps.reading_of(free.tau) == "as simulated"
+    kept = ps._fit(t, m, use, 20.0, [(fluid, meas)], as_simulated=False)
+    assert ps.reading_of(kept.tau) in ("holds", "cools")
+    assert np.abs(ps.cooled(t, fluid, m, kept, 20.0) - meas)[use].max() > 0.5
