@@ -81,8 +81,9 @@ def extend(best, results, twins, ctx, replayer) -> list:
                 continue
             trial.append(r2)
         base = _based_on(ctx, current)
-        trial = verdict_mod.judge(trial, base, ctx.cost(current, ctx.train), ctx.cost(current, ctx.held))
-        acc = sorted((r for r in trial if r.accepted), key=lambda r: -r.held_gain)
+        held = ctx.cost(current, ctx.held)
+        trial = verdict_mod.judge(trial, base, ctx.cost(current, ctx.train), held)
+        acc = verdict_mod.ranked([r for r in trial if r.accepted], held)
         if not acc:
             break
         nxt = acc[0]
