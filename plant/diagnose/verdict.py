@@ -5,8 +5,8 @@ Selection (the held-out gate keeps the null case honest):
     window (n_eff, see Context.n_eff) better than nominal AND no fitted parameter on a bound of
     its range; a sensor candidate on a storage sensor is judged on that sensor's residual
     relative to its neighbours instead, a candidate on the mixing station replayed alone on that
-    subsystem's outputs (_judged_local, _alone, LOCAL_GAIN); an offset (the same in every state),
-    judged so or on the whole cost, must also remove EXPLAIN of its sensor's excess over its limit;
+    subsystem's outputs (_judged_local, _alone, LOCAL_GAIN); an offset judged so (the same in
+    every state) must also remove EXPLAIN of that residual's excess over its limit;
   * the accepted candidates are ranked by held-out gain (`ranked`: a sensor effect ahead of a
     plant effect only if it also removes more of the whole cost); when a mismatch well above the replay's
     accuracy (locate.beyond_tolerance) remains after the best, it must have removed at least
@@ -102,14 +102,6 @@ def _judged(r, ctx, n_eff, b0, nominal_held):
     elif inside := within_calibration(r, ctx):
         reason = (f"held-out gain {r.held_gain * 100:.1f} %, but {inside}: a value the "
                   "nominal re-fit may take itself, a calibration rather than missing physics; rejected")
-    elif r.effect.same_in_every_state and r.signal and (share := _own_share(r, ctx)) < EXPLAIN:
-        # an offset on a sensor without neighbours is judged on the whole cost, and held, like
-        # one judged on its own residual (_judged_local), to removing EXPLAIN of its sensor's
-        # excess: rigsim r2's DHW coil at 0.3 of its heat transfer was named a -5.4 K offset on
-        # the DHW tank's top sensor (21 % of the cost) that removed 32 % of that sensor's excess
-        reason = (f"held-out gain {r.held_gain * 100:.1f} %, but it removes {share * 100:.0f} % < "
-                  f"{EXPLAIN * 100:.0f} % of {r.signal}'s held-out excess over its limit: the sensor "
-                  "differs from the twin otherwise than by this effect; rejected")
     else:
         accepted = True
         reason = f"held-out gain {r.held_gain * 100:.1f} %, BIC {r.bic:.1f} < {b0:.1f}"
@@ -279,12 +271,6 @@ def _explained(ctx, nominal_sim, best, idx) -> float:
     if best.local is not None and best.kind == "signal":
         return _local_share(best.local)
     return explained_share(ctx, nominal_sim, best.sim, idx)
-
-
-def _own_share(r, ctx) -> float:
-    """The share of its sensor's held-out excess over its limit that a sensor candidate judged on
-    the whole cost removes (against ctx.nominal_sim, the model it is judged against)."""
-    return explained_share(ctx, ctx.nominal_sim, r.sim, [ctx.measured.index(r.signal)])
 
 
 def _local_share(d: dict) -> float:
