@@ -31,7 +31,7 @@ separately for every replay (the nominal twin and each candidate alike, so they 
 comparison); or the replay's own stagnant fluid (AS_SIMULATED: the twin's own recordings). A value
 on a bound of the range is reported. A replay that fits nothing (no training window given) keeps its
 own value. "As simulated" is the twin's own recordings: a candidate's replay may read so only where
-the calibrated nominal replay does (`readings`); elsewhere it holds or cools. A candidate that makes
+the calibrated nominal replay does (`nominal`); elsewhere it holds or cools. A candidate that makes
 the branch flow leaves it fewer and shorter standstills in training, on which the replay's own
 fluid could fit best by chance and then hold a stopped CHP at 80 degC through the held-out days'
 two-hour standstills, where the lab's pipe cooled to 36 degC (rigsim realisation 1's
@@ -251,12 +251,12 @@ def _grid_squares(t, fluid, meas, m, masses, decays, T_room, idx, out):
 
 
 def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float | None,
-          pipes: dict, readings: dict | None = None) -> dict:
+          pipes: dict, nominal: dict | None = None) -> dict:
     """Replace the pipe sensors' columns of the replay rows `out` (first n samples) by their
     modelled reading (cooling toward T_room); tau and mass per branch fitted on the samples up to
     t_fit at which the branch does not run (None: no fit, the replay's own value), as simulated
-    only where `readings` ({flow signal: the nominal replay's public()["reading"]}) says so or
-    is silent. cols: catalogue name -> column of the signals the replay computes.
+    only where the nominal replay's fit of the branch (`nominal`: {flow signal: PipeFit}) reads
+    so or is not given. cols: catalogue name -> column of the signals the replay computes.
     -> {flow signal: PipeFit}."""
     t = rec.time[:n]
     fit = np.zeros(n, bool) if t_fit is None else (t <= t_fit)
@@ -272,7 +272,7 @@ def apply(rec, out: np.ndarray, cols: dict, n: int, T_room: float, t_fit: float 
         pf = AS_SIMULATED_FIT
         if use.sum() >= 10 and any(v is not None for v in meas.values()):
             pf = _fit(t, m, use, T_room, [(fluid[s], meas[s]) for s in sensors if meas[s] is not None],
-                      (readings or {}).get(flow, "as simulated") == "as simulated")
+                      (nominal or {}).get(flow, AS_SIMULATED_FIT).tau == AS_SIMULATED)
         elif t_fit is not None and any(v is not None for v in meas.values()):
             unseen[flow] = (m, fluid)
         for s in sensors:
@@ -369,16 +369,11 @@ def _refine(cost, grid, k, x, best) -> float:
     return float(math.exp(res.x)) if res.fun < best else x
 
 
-def reading_of(tau: float) -> str:
-    """What a sensor with this cooling time constant reads while its branch stands."""
-    return "cools" if 0 < tau < math.inf else "holds" if tau else "as simulated"
-
-
 def public(fit: PipeFit) -> dict:
     """report.json's entry of a branch's fit."""
     cools = 0 < fit.tau < math.inf
     return {"tau_s": fit.tau if cools else None,
-            "reading": reading_of(fit.tau),
+            "reading": "cools" if cools else "holds" if fit.tau else "as simulated",
             "pipe_water_kg": fit.mass if fit.fitted else None, "at_bound": at_bound(fit),
             "tau_from": "the other branches (this one never stood in training)" if fit.borrowed else "fitted"}
 

@@ -153,7 +153,7 @@ def calibrate(p: Prepared, house: str, refit_nominal: bool, log, jobs: int | Non
                                            for q in nref["parameters"]))
     # what each pipe sensor reads while its branch stands, as the nominal replay found it: a later
     # replay reads the twin's own stagnant fluid only where the nominal does (pipe_sensor.py)
-    rp = rp.with_calibration(readings={f: pipe_sensor.public(fit)["reading"] for f, fit in nominal.pipe.items()})
+    rp = rp.with_calibration(pipe_nominal=nominal.pipe)
     # the subsystems replayed alone between measured interfaces: candidates on them are judged there
     alone = ((({"instances": {hc.station}, "signals": list(hc.station_outputs)},) if rp.circuit else ())
              + (({"instances": {hc.emitter}, "signals": list(hc.emitter_outputs)},) if rp.emitter else ()))

@@ -138,9 +138,9 @@ class Replayer:
         self.lab = {**(rec.sensor_overrides() if hasattr(rec, "sensor_overrides") else {}), **self._lab_ports()}
         # the end of the training window: the pipe sensors' cooling and the storage sensors' places
         # are fitted up to it (pipe_sensor.py, sensor_height.py); the pipe sensors read as
-        # simulated only where the nominal replay's do (pipe_sensor.apply's readings)
+        # simulated only where the nominal replay's fits do (pipe_sensor.apply's nominal)
         self.t_train: float | None = None
-        self.readings: dict = {}
+        self.pipe_nominal: dict = {}
         # the emitter alone's element count (until calibrated emitter.OWN, its kind's kernel) and
         # the instances calibrated on their own subsystem: the nominal re-fit leaves those alone
         self.emitter_elements = emitter_mod.OWN
@@ -150,12 +150,12 @@ class Replayer:
         self.heights = self.tank_heights()
 
     def with_calibration(self, base: dict | None = None, calibrated=(), emitter_elements: int | None = None,
-                         t_train: float | None = None, readings: dict | None = None) -> "Replayer":
+                         t_train: float | None = None, pipe_nominal: dict | None = None) -> "Replayer":
         """A replayer like this one whose runs start from `base` on top of this one's, with the
         instances `calibrated` alone added (and the emitter's element count, the end of the
-        training window, the pipe sensors' readings, where given)."""
+        training window, the nominal replay's pipe fits, where given)."""
         out = copy.copy(self)
-        out.readings = {**self.readings, **(readings or {})}
+        out.pipe_nominal = {**self.pipe_nominal, **(pipe_nominal or {})}
         out.base = {**self.base, **(base or {})}
         out.calibrated = self.calibrated | frozenset(calibrated)
         if emitter_elements is not None:
@@ -310,7 +310,7 @@ class Replayer:
                 out[:, self.roles.catalogue.index(sig)] = v
         cols = {s: self.roles.catalogue.index(s) for s in self.simulated | set(self.bound.values())}
         t_fit = None if self.t_train is None else self.t_train if until is None else min(self.t_train, until)
-        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes, self.readings)
+        pipe = pipe_sensor.apply(self.rec, out, cols, n, self.room.T, t_fit, self.roles.pipes, self.pipe_nominal)
         tanks = {k: t._replace(layers=int(ov.get(f"{k}.n_layers", t.layers))) for k, t in self.heights.items()}
         heights = sensor_height.apply(self.rec, out, cols, n, tanks, t_fit)  # (a scheme's layers)
         self._checked = True

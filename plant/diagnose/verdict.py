@@ -43,10 +43,10 @@ def ranked(accepted, nominal_held: float) -> list:
     out = sorted(accepted, key=lambda r: -r.held_gain)
     if out and out[0].kind == "signal" and nominal_held > 0:
         whole = 1.0 - out[0].held_cost / nominal_held
-        plant = next((r for r in out if r.kind != "signal" and r.local is None and r.held_gain > whole), None)
-        if plant is not None:
-            out.remove(plant)
-            out.insert(0, plant)
+        i = next((i for i, r in enumerate(out) if r.kind != "signal" and r.local is None and r.held_gain > whole),
+                 None)
+        if i is not None:
+            out.insert(0, out.pop(i))
     return out
 
 

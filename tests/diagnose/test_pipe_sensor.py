@@ -75,7 +75,7 @@ def test_the_twins_own_fluid_is_a_reading_only_where_the_nominal_replay_reads_it
     meas = fluid.copy()
     use = m <= ps.FLOWING
     free = ps._fit(t, m, use, 20.0, [(fluid, meas)])
-    assert ps.reading_of(free.tau) == "as simulated"
+    assert ps.public(free)["reading"] == "as simulated"
     kept = ps._fit(t, m, use, 20.0, [(fluid, meas)], as_simulated=False)
-    assert ps.reading_of(kept.tau) in ("holds", "cools")
+    assert ps.public(kept)["reading"] in ("holds", "cools")
     assert np.abs(ps.cooled(t, fluid, m, kept, 20.0) - meas)[use].max() > 0.5
